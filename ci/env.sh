@@ -1,0 +1,6 @@
+# Sourced by the ci/ scripts: MPI settings every mpirun here needs (see shared/design/STACK.md).
+export OMPI_ALLOW_RUN_AS_ROOT=1
+export OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+# Without this, concurrent 2-rank jobs busy-wait and take 40x longer.
+export OMPI_MCA_mpi_yield_when_idle=1
+export CARGO_TERM_COLOR=never

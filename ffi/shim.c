@@ -1,0 +1,9 @@
+/* Values that PETSc and OpenMPI expose only as macros. No logic lives here. */
+#include <petscsys.h>
+#include <mpi.h>
+
+MPI_Comm petsc_ffi_comm_world(void) { return MPI_COMM_WORLD; }
+MPI_Comm petsc_ffi_comm_self(void) { return MPI_COMM_SELF; }
+size_t petsc_ffi_sizeof_petscint(void) { return sizeof(PetscInt); }
+size_t petsc_ffi_sizeof_petscscalar(void) { return sizeof(PetscScalar); }
+size_t petsc_ffi_sizeof_petscreal(void) { return sizeof(PetscReal); }

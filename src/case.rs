@@ -1,0 +1,644 @@
+//! The validated scene: a case file turned into a mesh, materials, constraints and loads.
+//!
+//! Every check of user input happens here, before any solve, with an error that names the key
+//! (`material[1].poisson`), the set, the body or the element. `mortar check` runs exactly this.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use crate::error::{Error, Result};
+use crate::fe::ElementType;
+use crate::io::case_file::{CaseFile, LoadCurveSpec, MeshPart};
+use crate::material::Material;
+use crate::mesh::{FaceRef, Mesh};
+
+/// A value's dependence on the load factor t in [0, 1].
+#[derive(Clone, Debug, PartialEq)]
+pub enum LoadCurve {
+    /// f(t) = t.
+    Ramp,
+    /// f(t) = 1.
+    Constant,
+    /// Piecewise linear through `(t, f)` points, constant outside.
+    Table(Vec<[f64; 2]>),
+}
+
+impl LoadCurve {
+    /// f(t).
+    pub fn eval(&self, t: f64) -> f64 {
+        match self {
+            LoadCurve::Ramp => t,
+            LoadCurve::Constant => 1.0,
+            LoadCurve::Table(pts) => {
+                if t <= pts[0][0] {
+                    return pts[0][1];
+                }
+                for w in pts.windows(2) {
+                    if t <= w[1][0] {
+                        let s = (t - w[0][0]) / (w[1][0] - w[0][0]);
+                        return w[0][1] + s * (w[1][1] - w[0][1]);
+                    }
+                }
+                pts[pts.len() - 1][1]
+            }
+        }
+    }
+}
+
+/// One constrained dof: `u[dof] = value * curve(t)`.
+#[derive(Clone, Debug)]
+pub struct Constraint {
+    pub dof: usize,
+    pub value: f64,
+    pub curve: usize,
+}
+
+/// A follower pressure on faces.
+#[derive(Clone, Debug)]
+pub struct PressureLoad {
+    pub set: String,
+    pub faces: Vec<FaceRef>,
+    pub value: f64,
+    pub curve: usize,
+    /// Follows the current face (true) or stays on the reference face (false).
+    pub follower: bool,
+}
+
+/// A body force on the elements of some bodies.
+#[derive(Clone, Debug)]
+pub struct BodyForce {
+    pub bodies: Vec<usize>,
+    pub value: [f64; 3],
+    pub curve: usize,
+}
+
+/// The exact solution a run is measured against.
+#[derive(Clone, Debug)]
+pub enum Verification {
+    /// Lamé's thick sphere under inner pressure (ALGORITHM.md section 9).
+    LameSphere {
+        inner_radius: f64,
+        outer_radius: f64,
+        pressure: f64,
+    },
+    /// u = G X everywhere.
+    UniformStrain { gradient: [[f64; 3]; 3] },
+}
+
+/// A validated scene.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// Scene name.
+    pub name: String,
+    /// Folder of the case file.
+    pub dir: PathBuf,
+    /// PETSc options file, if any.
+    pub petsc_options: Option<PathBuf>,
+    pub mesh: Mesh,
+    /// Material of each body (index = body).
+    pub materials: Vec<Material>,
+    /// Load curves referenced by index.
+    pub curves: Vec<LoadCurve>,
+    /// Constrained dofs, sorted by dof, one entry each.
+    pub constraints: Vec<Constraint>,
+    pub pressures: Vec<PressureLoad>,
+    pub body_forces: Vec<BodyForce>,
+    /// Sets whose reactions are reported, with their constrained dofs.
+    pub reaction_sets: BTreeMap<String, Vec<usize>>,
+    pub steps: usize,
+    pub max_cuts: usize,
+    pub newton: crate::io::case_file::NewtonSpec,
+    pub vtu_every: usize,
+    pub verification: Option<Verification>,
+}
+
+impl Scene {
+    /// Reads and validates a case file.
+    pub fn load(path: &Path) -> Result<Scene> {
+        let file = CaseFile::read(path)?;
+        let dir = path
+            .parent()
+            .map(Path::to_path_buf)
+            .unwrap_or_else(|| PathBuf::from("."));
+        let err = |msg: String| Error::Case {
+            file: path.to_path_buf(),
+            msg,
+        };
+        let name = file.name.clone().unwrap_or_else(|| {
+            dir.file_name()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "case".into())
+        });
+        let petsc_options = match &file.petsc_options {
+            Some(p) => {
+                let full = dir.join(p);
+                if !full.is_file() {
+                    return Err(err(format!(
+                        "petsc_options = \"{p}\": no such file {}",
+                        full.display()
+                    )));
+                }
+                Some(full)
+            }
+            None => None,
+        };
+        let mesh = build_mesh(&file.mesh, &dir, &err)?;
+        mesh.check()?;
+        let materials = build_materials(&file, &mesh, &err)?;
+        let mut curves = Vec::new();
+        let mut add_curve = |c: &LoadCurveSpec, key: String| -> Result<usize> {
+            curves.push(parse_curve(c, &key).map_err(err)?);
+            Ok(curves.len() - 1)
+        };
+
+        // Constraints: symmetry planes first, then prescribed displacements (a later entry for
+        // the same dof replaces an earlier one).
+        let mut by_dof: BTreeMap<usize, Constraint> = BTreeMap::new();
+        let mut reaction_sets = BTreeMap::new();
+        let zero_curve = add_curve(&LoadCurveSpec::default(), String::new())?;
+        for (i, s) in file.symmetry.iter().enumerate() {
+            let c = axis(&s.normal).ok_or_else(|| {
+                err(format!(
+                    "symmetry[{i}].normal = \"{}\": must be x, y or z",
+                    s.normal
+                ))
+            })?;
+            let nodes = mesh
+                .nodes_of_set(&s.set)
+                .map_err(|e| err(format!("symmetry[{i}].set: {e}")))?;
+            let dofs: Vec<usize> = nodes.iter().map(|&v| 3 * v + c).collect();
+            for &d in &dofs {
+                by_dof.insert(
+                    d,
+                    Constraint {
+                        dof: d,
+                        value: 0.0,
+                        curve: zero_curve,
+                    },
+                );
+            }
+            reaction_sets
+                .entry(s.set.clone())
+                .or_insert_with(Vec::new)
+                .extend(dofs);
+        }
+        for (i, d) in file.dirichlet.iter().enumerate() {
+            let key = format!("dirichlet[{i}]");
+            let nodes = mesh
+                .nodes_of_set(&d.set)
+                .map_err(|e| err(format!("{key}.set: {e}")))?;
+            let comps: Vec<usize> = d
+                .components
+                .iter()
+                .map(|s| {
+                    axis(s)
+                        .ok_or_else(|| err(format!("{key}.components: \"{s}\" is not x, y or z")))
+                })
+                .collect::<Result<_>>()?;
+            if comps.is_empty() {
+                return Err(err(format!("{key}.components: empty")));
+            }
+            if d.value.is_some() && d.gradient.is_some() {
+                return Err(err(format!("{key}: give value or gradient, not both")));
+            }
+            let values = d.value.clone().unwrap_or_else(|| vec![0.0; comps.len()]);
+            if values.len() != comps.len() {
+                return Err(err(format!(
+                    "{key}.value has {} entries for {} components",
+                    values.len(),
+                    comps.len()
+                )));
+            }
+            if let Some(v) = values.iter().find(|v| !v.is_finite()) {
+                return Err(err(format!("{key}.value: {v} is not finite")));
+            }
+            let curve = add_curve(&d.curve, format!("{key}.curve"))?;
+            let mut dofs = Vec::new();
+            for &v in &nodes {
+                for (k, &c) in comps.iter().enumerate() {
+                    let value = match &d.gradient {
+                        Some(g) => (0..3).map(|j| g[c][j] * mesh.coords[v][j]).sum(),
+                        None => values[k],
+                    };
+                    by_dof.insert(
+                        3 * v + c,
+                        Constraint {
+                            dof: 3 * v + c,
+                            value,
+                            curve,
+                        },
+                    );
+                    dofs.push(3 * v + c);
+                }
+            }
+            reaction_sets
+                .entry(d.set.clone())
+                .or_insert_with(Vec::new)
+                .extend(dofs);
+        }
+        for dofs in reaction_sets.values_mut() {
+            dofs.sort_unstable();
+            dofs.dedup();
+        }
+        if let Some(names) = &file.output.reactions {
+            reaction_sets.retain(|k, _| names.contains(k));
+            for n in names {
+                if !reaction_sets.contains_key(n) {
+                    return Err(err(format!(
+                        "output.reactions: '{n}' is not a constrained set (use a set named in dirichlet or symmetry)"
+                    )));
+                }
+            }
+        }
+
+        let mut pressures = Vec::new();
+        for (i, p) in file.pressure.iter().enumerate() {
+            let key = format!("pressure[{i}]");
+            let faces = mesh
+                .face_set(&p.set)
+                .map_err(|e| err(format!("{key}.set: {e}")))?
+                .to_vec();
+            if !p.value.is_finite() {
+                return Err(err(format!("{key}.value is not finite")));
+            }
+            let curve = add_curve(&p.curve, format!("{key}.curve"))?;
+            pressures.push(PressureLoad {
+                set: p.set.clone(),
+                faces,
+                value: p.value,
+                curve,
+                follower: p.follower,
+            });
+        }
+        let mut body_forces = Vec::new();
+        for (i, b) in file.body_force.iter().enumerate() {
+            let key = format!("body_force[{i}]");
+            let bodies = match &b.body {
+                Some(name) => vec![body_index(&mesh, name)
+                    .ok_or_else(|| err(format!("{key}.body: no body '{name}'")))?],
+                None => (0..mesh.bodies.len()).collect(),
+            };
+            if b.value.iter().any(|v| !v.is_finite()) {
+                return Err(err(format!("{key}.value is not finite")));
+            }
+            let curve = add_curve(&b.curve, format!("{key}.curve"))?;
+            body_forces.push(BodyForce {
+                bodies,
+                value: b.value,
+                curve,
+            });
+        }
+        if file.steps.count == 0 {
+            return Err(err("steps.count must be at least 1".into()));
+        }
+        let n = &file.newton;
+        if !(n.rtol > 0.0 && n.atol > 0.0 && n.max_it > 0) {
+            return Err(err(
+                "newton: rtol and atol must be > 0 and max_it >= 1".into()
+            ));
+        }
+        let verification = match &file.verification {
+            None => None,
+            Some(v) => Some(build_verification(v).map_err(err)?),
+        };
+        let constraints = by_dof.into_values().collect();
+        Ok(Scene {
+            name,
+            dir,
+            petsc_options,
+            mesh,
+            materials,
+            curves,
+            constraints,
+            pressures,
+            body_forces,
+            reaction_sets,
+            steps: file.steps.count,
+            max_cuts: file.steps.max_cuts,
+            newton: file.newton.clone(),
+            vtu_every: file.output.vtu_every,
+            verification,
+        })
+    }
+
+    /// `constrained[3 * node + c]` for every dof.
+    pub fn constrained_mask(&self) -> Vec<bool> {
+        let mut m = vec![false; 3 * self.mesh.num_nodes()];
+        for c in &self.constraints {
+            m[c.dof] = true;
+        }
+        m
+    }
+}
+
+fn axis(s: &str) -> Option<usize> {
+    match s {
+        "x" => Some(0),
+        "y" => Some(1),
+        "z" => Some(2),
+        _ => None,
+    }
+}
+
+fn body_index(mesh: &Mesh, name: &str) -> Option<usize> {
+    mesh.bodies.iter().position(|b| b == name)
+}
+
+fn parse_curve(c: &LoadCurveSpec, key: &str) -> std::result::Result<LoadCurve, String> {
+    match (c.kind.as_deref().unwrap_or("ramp"), &c.table) {
+        ("ramp", None) => Ok(LoadCurve::Ramp),
+        ("constant", None) => Ok(LoadCurve::Constant),
+        ("table", Some(t)) => {
+            if t.len() < 2 {
+                return Err(format!("{key}.table needs at least two points"));
+            }
+            if t.windows(2).any(|w| w[1][0] <= w[0][0])
+                || t.iter().flatten().any(|v| !v.is_finite())
+            {
+                return Err(format!("{key}.table: t must increase and values be finite"));
+            }
+            Ok(LoadCurve::Table(t.clone()))
+        }
+        ("table", None) => Err(format!(
+            "{key}: kind = \"table\" needs table = [[t, f], ...]"
+        )),
+        (k @ ("ramp" | "constant"), Some(_)) => {
+            Err(format!("{key}: table given with kind = \"{k}\""))
+        }
+        (k, _) => Err(format!(
+            "{key}.kind = \"{k}\": must be ramp, constant or table"
+        )),
+    }
+}
+
+fn build_verification(
+    v: &crate::io::case_file::VerificationSpec,
+) -> std::result::Result<Verification, String> {
+    match v.kind.as_str() {
+        "lame_sphere" => {
+            let (a, b, p) = match (v.inner_radius, v.outer_radius, v.pressure) {
+                (Some(a), Some(b), Some(p)) => (a, b, p),
+                _ => {
+                    return Err(
+                        "verification: lame_sphere needs inner_radius, outer_radius, pressure"
+                            .into(),
+                    )
+                }
+            };
+            if !(a > 0.0 && b > a) {
+                return Err(format!("verification: radii must satisfy 0 < inner_radius < outer_radius (got {a}, {b})"));
+            }
+            Ok(Verification::LameSphere {
+                inner_radius: a,
+                outer_radius: b,
+                pressure: p,
+            })
+        }
+        "uniform_strain" => {
+            let g = v
+                .gradient
+                .ok_or("verification: uniform_strain needs gradient")?;
+            Ok(Verification::UniformStrain { gradient: g })
+        }
+        k => Err(format!(
+            "verification.kind = \"{k}\": must be lame_sphere or uniform_strain"
+        )),
+    }
+}
+
+fn build_materials(
+    file: &CaseFile,
+    mesh: &Mesh,
+    err: &dyn Fn(String) -> Error,
+) -> Result<Vec<Material>> {
+    let mut mats: Vec<Option<Material>> = vec![None; mesh.bodies.len()];
+    for (i, m) in file.material.iter().enumerate() {
+        let key = format!("material[{i}]");
+        let body = match &m.body {
+            Some(name) => body_index(mesh, name).ok_or_else(|| {
+                err(format!(
+                    "{key}.body: no body '{name}' (have: {})",
+                    mesh.bodies.join(", ")
+                ))
+            })?,
+            None if mesh.bodies.len() == 1 => 0,
+            None => {
+                return Err(err(format!(
+                    "{key}.body: required when the mesh has several bodies"
+                )))
+            }
+        };
+        let mat = match m.model.as_str() {
+            "linear_elastic" => Material::LinearElastic {
+                young: m.young,
+                poisson: m.poisson,
+            },
+            "neo_hookean" => Material::NeoHookean {
+                young: m.young,
+                poisson: m.poisson,
+            },
+            other => {
+                return Err(err(format!(
+                    "{key}.model = \"{other}\": must be linear_elastic or neo_hookean"
+                )))
+            }
+        };
+        mat.validate().map_err(|e| err(format!("{key}: {e}")))?;
+        if mats[body].is_some() {
+            return Err(err(format!(
+                "{key}: body '{}' already has a material",
+                mesh.bodies[body]
+            )));
+        }
+        mats[body] = Some(mat);
+    }
+    mats.into_iter()
+        .enumerate()
+        .map(|(b, m)| m.ok_or_else(|| err(format!("material: body '{}' has none", mesh.bodies[b]))))
+        .collect()
+}
+
+fn build_mesh(parts: &[MeshPart], dir: &Path, err: &dyn Fn(String) -> Error) -> Result<Mesh> {
+    if parts.is_empty() {
+        return Err(err("mesh: at least one [[mesh]] part is required".into()));
+    }
+    let mut mesh = Mesh::new();
+    for (i, part) in parts.iter().enumerate() {
+        let mut m = build_part(part, i, dir, err)?;
+        if let Some(t) = part.translate {
+            for x in m.coords.iter_mut() {
+                for d in 0..3 {
+                    x[d] += t[d];
+                }
+            }
+        }
+        if mesh.num_elements() == 0 && mesh.coords.is_empty() {
+            mesh = m;
+        } else {
+            mesh.merge(m);
+        }
+    }
+    Ok(mesh)
+}
+
+fn build_part(p: &MeshPart, i: usize, dir: &Path, err: &dyn Fn(String) -> Error) -> Result<Mesh> {
+    use crate::mesh::generate;
+    let key = format!("mesh[{i}]");
+    let need = |v: Option<f64>, name: &str| {
+        v.ok_or_else(|| {
+            err(format!(
+                "{key}.{name} is required for generator \"{}\"",
+                p.generator
+            ))
+        })
+    };
+    let positive = |v: f64, name: &str| {
+        if v > 0.0 && v.is_finite() {
+            Ok(v)
+        } else {
+            Err(err(format!("{key}.{name} = {v}: must be > 0")))
+        }
+    };
+    let element = || -> Result<ElementType> {
+        let name = p
+            .element
+            .as_deref()
+            .ok_or_else(|| err(format!("{key}.element is required")))?;
+        ElementType::from_name(name).ok_or_else(|| {
+            err(format!(
+                "{key}.element = \"{name}\": must be hex8, hex20, hex27, tet4 or tet10"
+            ))
+        })
+    };
+    let divisions = || -> Result<[usize; 3]> {
+        let d = p
+            .divisions
+            .ok_or_else(|| err(format!("{key}.divisions is required")))?;
+        if d.contains(&0) {
+            return Err(err(format!(
+                "{key}.divisions = {d:?}: every entry must be >= 1"
+            )));
+        }
+        Ok(d)
+    };
+    if p.generator != "gmsh" && p.file.is_some() {
+        return Err(err(format!("{key}.file is only for generator \"gmsh\"")));
+    }
+    let mut mesh = match p.generator.as_str() {
+        "box" => {
+            let (lo, hi) = (
+                p.lo.ok_or_else(|| err(format!("{key}.lo is required")))?,
+                p.hi.ok_or_else(|| err(format!("{key}.hi is required")))?,
+            );
+            if (0..3).any(|d| hi[d] <= lo[d]) {
+                return Err(err(format!(
+                    "{key}: hi {hi:?} must exceed lo {lo:?} in every axis"
+                )));
+            }
+            generate::box_mesh(element()?, divisions()?, lo, hi, &p.body)
+        }
+        "beam" => generate::beam(
+            element()?,
+            divisions()?,
+            positive(need(p.length, "length")?, "length")?,
+            positive(need(p.width, "width")?, "width")?,
+            positive(need(p.height, "height")?, "height")?,
+            &p.body,
+        ),
+        "thick_sphere_octant" => {
+            let a = positive(need(p.inner_radius, "inner_radius")?, "inner_radius")?;
+            let b = positive(need(p.outer_radius, "outer_radius")?, "outer_radius")?;
+            if b <= a {
+                return Err(err(format!(
+                    "{key}: outer_radius {b} must exceed inner_radius {a}"
+                )));
+            }
+            let nc = p
+                .n_circ
+                .ok_or_else(|| err(format!("{key}.n_circ is required")))?;
+            let nr = p
+                .n_rad
+                .ok_or_else(|| err(format!("{key}.n_rad is required")))?;
+            if nc == 0 || nr == 0 {
+                return Err(err(format!("{key}: n_circ and n_rad must be >= 1")));
+            }
+            generate::thick_sphere_octant(element()?, nc, nr, a, b, &p.body)
+        }
+        "gmsh" => {
+            let f = p
+                .file
+                .as_deref()
+                .ok_or_else(|| err(format!("{key}.file is required for gmsh")))?;
+            return crate::io::gmsh::read_msh(&dir.join(f));
+        }
+        g => {
+            return Err(err(format!(
+                "{key}.generator = \"{g}\": must be box, beam, thick_sphere_octant or gmsh"
+            )))
+        }
+    };
+    prefix_sets(&mut mesh, &p.body);
+    if p.distort != 0.0 {
+        if !(0.0..0.3).contains(&p.distort) {
+            return Err(err(format!(
+                "{key}.distort = {}: must be in [0, 0.3)",
+                p.distort
+            )));
+        }
+        distort_interior(&mut mesh, p.distort);
+    }
+    Ok(mesh)
+}
+
+/// Renames generated sets `s` to `<body>.s`.
+fn prefix_sets(mesh: &mut Mesh, body: &str) {
+    let rename = |m: &mut BTreeMap<String, Vec<_>>| {
+        *m = std::mem::take(m)
+            .into_iter()
+            .map(|(k, v)| (format!("{body}.{k}"), v))
+            .collect();
+    };
+    rename(&mut mesh.node_sets);
+    let fs = std::mem::take(&mut mesh.face_sets);
+    mesh.face_sets = fs
+        .into_iter()
+        .map(|(k, v)| (format!("{body}.{k}"), v))
+        .collect();
+    rename(&mut mesh.element_sets);
+}
+
+/// Moves every node that lies in no node set (the interior of a generated part) by a
+/// deterministic pseudo-random vector of length up to `amount` times the smallest element edge.
+fn distort_interior(mesh: &mut Mesh, amount: f64) {
+    let mut on_set = vec![false; mesh.num_nodes()];
+    for nodes in mesh.node_sets.values() {
+        for &v in nodes {
+            on_set[v] = true;
+        }
+    }
+    let mut h = f64::INFINITY;
+    for e in 0..mesh.num_elements() {
+        let en = mesh.element_nodes(e);
+        for edge in mesh.types[e].edges() {
+            let (a, b) = (mesh.coords[en[edge[0]]], mesh.coords[en[edge[1]]]);
+            let l = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
+            h = h.min(l);
+        }
+    }
+    let mut state: u64 = 0x9E37_79B9_7F4A_7C15;
+    let mut next = || {
+        // xorshift64*: reproducible on every rank and platform.
+        state ^= state >> 12;
+        state ^= state << 25;
+        state ^= state >> 27;
+        (state.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    };
+    for (v, x) in mesh.coords.iter_mut().enumerate() {
+        let d = [next(), next(), next()];
+        if !on_set[v] {
+            for k in 0..3 {
+                x[k] += amount * h * d[k] / 3f64.sqrt();
+            }
+        }
+    }
+}

@@ -1,0 +1,235 @@
+//! Degrees of freedom: which rank assembles which element, who owns which node, and the PETSc
+//! global number of every unconstrained dof.
+//!
+//! # Design
+//!
+//! - The mesh is replicated on every rank (see `crate::mesh`); METIS splits the elements
+//!   (`mesh::partition`), and every rank computes the same numbering from the same data, so no
+//!   numbering is communicated.
+//! - A node belongs to the lowest rank among the elements around it; its three dofs
+//!   (`3 * node + component`) get consecutive global numbers in ascending node order within each
+//!   rank, ranks in order, so each rank owns one contiguous block of rows.
+//! - Constrained dofs (prescribed displacements, symmetry planes) are **eliminated**: they get
+//!   the index -1, which PETSc ignores in `VecSetValues`/`MatSetValues`, and their values come
+//!   from the load curve. The matrix holds only free dofs, stays well conditioned, and reactions
+//!   are the internal forces at the constrained dofs (summed over elements, then over ranks).
+//! - Ghost values: each rank gathers the free dofs of the nodes of its own elements with a PETSc
+//!   `VecScatter` (`petsc::Scatter`).
+//! - The sparsity of every owned row is exact: the free dofs of every node that shares an element
+//!   with the row's node, over the whole mesh (the mesh is known everywhere).
+
+use crate::mesh::Mesh;
+use crate::petsc::{PetscInt, Sparsity};
+
+/// Ownership and numbering of the dofs of one rank.
+#[derive(Clone, Debug)]
+pub struct DofMap {
+    /// This rank and the number of ranks.
+    pub rank: usize,
+    pub ranks: usize,
+    /// Rank that assembles each element.
+    pub element_rank: Vec<usize>,
+    /// Elements this rank assembles, ascending.
+    pub local_elements: Vec<usize>,
+    /// Rank that owns each node.
+    pub node_owner: Vec<usize>,
+    /// PETSc global index of each dof `3 * node + c`, or -1 when constrained.
+    pub global: Vec<PetscInt>,
+    /// First owned global index and the number of owned free dofs.
+    pub owned_start: usize,
+    pub owned_count: usize,
+    /// Total number of free dofs.
+    pub total_free: usize,
+    /// Nodes of this rank's elements, ascending.
+    pub local_nodes: Vec<usize>,
+    /// Free dofs (`3 * node + c`) of `local_nodes`, ascending, and their global indices: the
+    /// entries this rank gathers from the distributed solution.
+    pub gathered_dofs: Vec<usize>,
+    pub gathered_global: Vec<PetscInt>,
+}
+
+impl DofMap {
+    /// Numbers the dofs for `ranks` ranks, given each element's rank and which dofs are
+    /// constrained (`constrained[3 * node + c]`).
+    pub fn new(
+        mesh: &Mesh,
+        element_rank: Vec<usize>,
+        rank: usize,
+        ranks: usize,
+        constrained: &[bool],
+    ) -> DofMap {
+        let n = mesh.num_nodes();
+        let mut node_owner = vec![usize::MAX; n];
+        for (e, &r) in element_rank.iter().enumerate() {
+            for &v in mesh.element_nodes(e) {
+                node_owner[v] = node_owner[v].min(r);
+            }
+        }
+        for o in node_owner.iter_mut() {
+            if *o == usize::MAX {
+                *o = 0;
+            }
+        }
+        let mut global = vec![-1 as PetscInt; 3 * n];
+        let mut next: PetscInt = 0;
+        let (mut owned_start, mut owned_count) = (0, 0);
+        for r in 0..ranks {
+            if r == rank {
+                owned_start = next as usize;
+            }
+            for v in (0..n).filter(|&v| node_owner[v] == r) {
+                for c in 0..3 {
+                    if !constrained[3 * v + c] {
+                        global[3 * v + c] = next;
+                        next += 1;
+                    }
+                }
+            }
+            if r == rank {
+                owned_count = next as usize - owned_start;
+            }
+        }
+        let local_elements: Vec<usize> = (0..mesh.num_elements())
+            .filter(|&e| element_rank[e] == rank)
+            .collect();
+        let mut local_nodes: Vec<usize> = local_elements
+            .iter()
+            .flat_map(|&e| mesh.element_nodes(e).iter().copied())
+            .collect();
+        local_nodes.sort_unstable();
+        local_nodes.dedup();
+        let gathered_dofs: Vec<usize> = local_nodes
+            .iter()
+            .flat_map(|&v| (0..3).map(move |c| 3 * v + c))
+            .filter(|&d| global[d] >= 0)
+            .collect();
+        let gathered_global = gathered_dofs.iter().map(|&d| global[d]).collect();
+        DofMap {
+            rank,
+            ranks,
+            element_rank,
+            local_elements,
+            node_owner,
+            global,
+            owned_start,
+            owned_count,
+            total_free: next as usize,
+            local_nodes,
+            gathered_dofs,
+            gathered_global,
+        }
+    }
+
+    /// Global indices of the dofs of an element's nodes, `3 * a + c` order (-1 where constrained).
+    pub fn element_dofs(&self, nodes: &[usize], out: &mut Vec<PetscInt>) {
+        out.clear();
+        for &v in nodes {
+            out.extend_from_slice(&self.global[3 * v..3 * v + 3]);
+        }
+    }
+
+    /// The exact nonzero pattern of the owned rows, from the element stencils of the whole mesh.
+    pub fn bulk_sparsity(&self, mesh: &Mesh) -> Sparsity {
+        let node_elements = node_to_elements(mesh);
+        let mut rows = vec![Vec::new(); self.owned_count];
+        let mut cols: Vec<PetscInt> = Vec::new();
+        for v in (0..mesh.num_nodes()).filter(|&v| self.node_owner[v] == self.rank) {
+            cols.clear();
+            for &e in &node_elements[v] {
+                for &w in mesh.element_nodes(e) {
+                    cols.extend(self.global[3 * w..3 * w + 3].iter().filter(|&&g| g >= 0));
+                }
+            }
+            cols.sort_unstable();
+            cols.dedup();
+            for c in 0..3 {
+                let g = self.global[3 * v + c];
+                if g >= 0 {
+                    rows[g as usize - self.owned_start] = cols.clone();
+                }
+            }
+        }
+        Sparsity {
+            row_start: self.owned_start,
+            rows,
+        }
+    }
+}
+
+/// For every node, the elements that contain it.
+pub fn node_to_elements(mesh: &Mesh) -> Vec<Vec<usize>> {
+    let mut adj = vec![Vec::new(); mesh.num_nodes()];
+    for e in 0..mesh.num_elements() {
+        for &v in mesh.element_nodes(e) {
+            adj[v].push(e);
+        }
+    }
+    adj
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fe::ElementType;
+
+    /// Two Hex8 elements side by side sharing four nodes.
+    fn two_hexes() -> Mesh {
+        let mut m = Mesh::new();
+        for i in 0..3 {
+            for (y, z) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
+                m.coords.push([i as f64, y, z]);
+            }
+        }
+        // node index = 4 * i + k with k over (y,z) corners; build VTK hex from x-slices i, i+1.
+        for i in 0..2 {
+            let a = 4 * i;
+            let b = 4 * (i + 1);
+            // bottom (z=0): (x0,y0),(x1,y0),(x1,y1),(x0,y1); top (z=1) likewise
+            m.push_element(
+                ElementType::Hex8,
+                0,
+                &[a, b, b + 1, a + 1, a + 3, b + 3, b + 2, a + 2],
+            );
+        }
+        m.bodies.push("b".into());
+        m
+    }
+
+    #[test]
+    fn numbering_is_contiguous_per_rank_and_skips_constrained() {
+        let m = two_hexes();
+        let mut constrained = vec![false; 3 * m.num_nodes()];
+        for v in 0..4 {
+            constrained[3 * v] = true; // x fixed on the face x = 0
+        }
+        let parts = vec![0, 1];
+        let d0 = DofMap::new(&m, parts.clone(), 0, 2, &constrained);
+        let d1 = DofMap::new(&m, parts, 1, 2, &constrained);
+        assert_eq!(d0.global, d1.global);
+        assert_eq!(d0.total_free, 3 * 12 - 4);
+        // Shared nodes (x = 1) belong to rank 0.
+        assert_eq!(d0.owned_count, 8 * 3 - 4);
+        assert_eq!(d1.owned_start, d0.owned_count);
+        assert_eq!(d0.owned_count + d1.owned_count, d0.total_free);
+        for v in 0..4 {
+            assert_eq!(d0.global[3 * v], -1);
+        }
+    }
+
+    #[test]
+    fn sparsity_rows_hold_every_element_neighbour() {
+        let m = two_hexes();
+        let constrained = vec![false; 3 * m.num_nodes()];
+        let d = DofMap::new(&m, vec![0, 0], 0, 1, &constrained);
+        let s = d.bulk_sparsity(&m);
+        // A node on x = 0 touches one element (8 nodes), a node on x = 1 touches both (12 nodes).
+        assert_eq!(s.rows[0].len(), 24);
+        assert_eq!(s.rows[3 * 4].len(), 36);
+        let (dn, on) = s.nnz();
+        assert!(on.iter().all(|&o| o == 0));
+        assert_eq!(
+            dn.iter().map(|&x| x as usize).sum::<usize>(),
+            s.num_nonzeros()
+        );
+    }
+}

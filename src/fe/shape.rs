@@ -1,0 +1,811 @@
+//! Shape functions of the solid elements and faces, and the geometry of a face.
+//!
+//! Node ordering and parent domains are those of [`super::element`] (VTK ordering); every shape
+//! function satisfies `N_a(node_coords()[b]) = delta_ab`.
+//!
+//! # Hexahedra and quadrilaterals (parent domain `[-1, 1]^d`, `d = 3` or `2`)
+//!
+//! Node `a` sits at `s^a` with `s^a_i` in `{-1, 0, 1}`. All three families are built from products
+//! of one-dimensional factors:
+//!
+//! - **Hex8, Quad4** (multilinear): `N_a = prod_i (1 + s^a_i x_i) / 2`.
+//! - **Hex27, Quad9** (Lagrange, tensor product of the 1D quadratics):
+//!   `N_a = prod_i l_{s^a_i}(x_i)` with `l_{-1}(t) = t (t - 1) / 2`, `l_0(t) = 1 - t^2`,
+//!   `l_{+1}(t) = t (t + 1) / 2`.
+//! - **Hex20, Quad8** (serendipity), with `p_i = 1 + s^a_i x_i`:
+//!   - corner nodes: `N_a = 2^-d (prod_i p_i) (sum_i s^a_i x_i - (d - 1))`, whose gradient is
+//!     `dN_a/dx_j = 2^-d s^a_j (prod_{i != j} p_i) (sum_i s^a_i x_i + s^a_j x_j + 2 - d)`;
+//!   - mid-edge nodes, on the edge along direction `m` (`s^a_m = 0`):
+//!     `N_a = 2^(1-d) (1 - x_m^2) prod_{i != m} p_i`.
+//!
+//!   The serendipity space is spanned by the monomials `x^a y^b z^c` with every exponent `<= 2`
+//!   and at most one exponent equal to 2 (20 monomials in 3D, 8 in 2D).
+//!
+//! # Tetrahedra and triangles (unit simplex)
+//!
+//! With the barycentric coordinates `L_0 = 1 - sum_i x_i`, `L_i = x_i` (`i = 1..=d`):
+//!
+//! - **Tet4, Tri3**: `N_a = L_a`.
+//! - **Tet10, Tri6**: corners `N_a = L_a (2 L_a - 1)`; the mid-edge node of edge `(a, b)`:
+//!   `N = 4 L_a L_b`. Gradients follow from `grad L_0 = (-1, ..., -1)`, `grad L_i = e_i`.
+//!
+//! # Face geometry
+//!
+//! For a face with node coordinates `x_a`, the tangents are `x_,xi = sum_a dN_a/dxi x_a` and
+//! `x_,eta = sum_a dN_a/deta x_a`; the surface element is `dA = |x_,xi x x_,eta| dxi deta`, and the
+//! outward normal (faces are ordered counter-clockwise seen from outside) is
+//! `normalize(x_,xi x x_,eta)`.
+
+use super::element::{ElementType, FaceType};
+
+/// Parametric positions of the Hex27 nodes (the first 8 are the Hex8 nodes, the first 20 the Hex20
+/// nodes), in the VTK ordering of [`ElementType::node_coords`].
+const HEX_NODES: [[f64; 3]; 27] = [
+    // Corners.
+    [-1.0, -1.0, -1.0],
+    [1.0, -1.0, -1.0],
+    [1.0, 1.0, -1.0],
+    [-1.0, 1.0, -1.0],
+    [-1.0, -1.0, 1.0],
+    [1.0, -1.0, 1.0],
+    [1.0, 1.0, 1.0],
+    [-1.0, 1.0, 1.0],
+    // Bottom edges 0-1, 1-2, 2-3, 3-0.
+    [0.0, -1.0, -1.0],
+    [1.0, 0.0, -1.0],
+    [0.0, 1.0, -1.0],
+    [-1.0, 0.0, -1.0],
+    // Top edges 4-5, 5-6, 6-7, 7-4.
+    [0.0, -1.0, 1.0],
+    [1.0, 0.0, 1.0],
+    [0.0, 1.0, 1.0],
+    [-1.0, 0.0, 1.0],
+    // Vertical edges 0-4, 1-5, 2-6, 3-7.
+    [-1.0, -1.0, 0.0],
+    [1.0, -1.0, 0.0],
+    [1.0, 1.0, 0.0],
+    [-1.0, 1.0, 0.0],
+    // Face centres xi = -1, +1, eta = -1, +1, zeta = -1, +1.
+    [-1.0, 0.0, 0.0],
+    [1.0, 0.0, 0.0],
+    [0.0, -1.0, 0.0],
+    [0.0, 1.0, 0.0],
+    [0.0, 0.0, -1.0],
+    [0.0, 0.0, 1.0],
+    // Centre.
+    [0.0, 0.0, 0.0],
+];
+
+/// Parametric positions of the Quad9 nodes (the first 4 are the Quad4 nodes, the first 8 the
+/// Quad8 nodes).
+const QUAD_NODES: [[f64; 2]; 9] = [
+    [-1.0, -1.0],
+    [1.0, -1.0],
+    [1.0, 1.0],
+    [-1.0, 1.0],
+    [0.0, -1.0],
+    [1.0, 0.0],
+    [0.0, 1.0],
+    [-1.0, 0.0],
+    [0.0, 0.0],
+];
+
+/// Edges of the triangle, in the order of the Tri6 mid-edge nodes 3..5.
+const TRI_EDGES: [[usize; 2]; 3] = [[0, 1], [1, 2], [2, 0]];
+
+/// Largest number of nodes of a face (Quad9).
+const MAX_FACE_NODES: usize = 9;
+
+/// The three families of shape functions on `[-1, 1]^d`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum TensorFamily {
+    Linear,
+    Serendipity,
+    Lagrange,
+}
+
+/// The 1D linear factor `(1 + s t) / 2` of the node at `s = +-1` and its derivative.
+fn linear_1d(s: f64, t: f64) -> (f64, f64) {
+    (0.5 * (1.0 + s * t), 0.5 * s)
+}
+
+/// The 1D quadratic Lagrange factor of the node at `s` in `{-1, 0, 1}` and its derivative.
+fn quadratic_1d(s: f64, t: f64) -> (f64, f64) {
+    if s < -0.5 {
+        (0.5 * t * (t - 1.0), t - 0.5)
+    } else if s > 0.5 {
+        (0.5 * t * (t + 1.0), t + 0.5)
+    } else {
+        (1.0 - t * t, -2.0 * t)
+    }
+}
+
+/// Product of the entries of `v`, leaving out entry `skip` (no entry is left out if
+/// `skip >= D`).
+fn product_except<const D: usize>(v: &[f64; D], skip: usize) -> f64 {
+    v.iter()
+        .enumerate()
+        .filter(|&(i, _)| i != skip)
+        .map(|(_, x)| x)
+        .product()
+}
+
+/// Value and gradient of `prod_i f_i(x_i)` given the factors `f_i` and their derivatives `df_i`.
+fn tensor_product<const D: usize>(f: [f64; D], df: [f64; D]) -> (f64, [f64; D]) {
+    let value = product_except(&f, D);
+    let grad = std::array::from_fn(|j| df[j] * product_except(&f, j));
+    (value, grad)
+}
+
+/// Value and gradient of a serendipity shape function of the node at `s`.
+fn serendipity_node<const D: usize>(x: [f64; D], s: [f64; D]) -> (f64, [f64; D]) {
+    match s.iter().position(|&si| si == 0.0) {
+        None => serendipity_corner(x, s),
+        Some(m) => serendipity_mid_edge(x, s, m),
+    }
+}
+
+/// Serendipity corner function `2^-d (prod p_i) (sum s_i x_i - (d - 1))`.
+fn serendipity_corner<const D: usize>(x: [f64; D], s: [f64; D]) -> (f64, [f64; D]) {
+    let d = D as f64;
+    let scale = 0.5f64.powi(D as i32);
+    let p: [f64; D] = std::array::from_fn(|i| 1.0 + s[i] * x[i]);
+    let sx: f64 = (0..D).map(|i| s[i] * x[i]).sum();
+    let value = scale * product_except(&p, D) * (sx - (d - 1.0));
+    let grad = std::array::from_fn(|j| {
+        scale * s[j] * product_except(&p, j) * (sx + s[j] * x[j] + 2.0 - d)
+    });
+    (value, grad)
+}
+
+/// Serendipity mid-edge function `2^(1-d) (1 - x_m^2) prod_{i != m} p_i` of the node with
+/// `s_m = 0`.
+fn serendipity_mid_edge<const D: usize>(x: [f64; D], s: [f64; D], m: usize) -> (f64, [f64; D]) {
+    let f: [f64; D] = std::array::from_fn(|i| {
+        if i == m {
+            1.0 - x[i] * x[i]
+        } else {
+            0.5 * (1.0 + s[i] * x[i])
+        }
+    });
+    let df: [f64; D] = std::array::from_fn(|i| if i == m { -2.0 * x[i] } else { 0.5 * s[i] });
+    tensor_product(f, df)
+}
+
+/// Value and gradient of the shape function of the node at `s` of a hexahedron or quadrilateral.
+fn tensor_node<const D: usize>(family: TensorFamily, x: [f64; D], s: [f64; D]) -> (f64, [f64; D]) {
+    let factors = |one_d: fn(f64, f64) -> (f64, f64)| {
+        let fd: [(f64, f64); D] = std::array::from_fn(|i| one_d(s[i], x[i]));
+        tensor_product(fd.map(|v| v.0), fd.map(|v| v.1))
+    };
+    match family {
+        TensorFamily::Linear => factors(linear_1d),
+        TensorFamily::Lagrange => factors(quadratic_1d),
+        TensorFamily::Serendipity => serendipity_node(x, s),
+    }
+}
+
+/// Barycentric coordinate `L_k` of the `D`-simplex and its (constant) gradient.
+fn barycentric<const D: usize>(x: [f64; D], k: usize) -> (f64, [f64; D]) {
+    if k == 0 {
+        (1.0 - x.iter().sum::<f64>(), [-1.0; D])
+    } else {
+        (
+            x[k - 1],
+            std::array::from_fn(|j| if j == k - 1 { 1.0 } else { 0.0 }),
+        )
+    }
+}
+
+/// Value and gradient of shape function `a` of a linear (`edges` empty) or quadratic simplex whose
+/// mid-edge node `D + 1 + k` sits on `edges[k]`.
+fn simplex_node<const D: usize>(x: [f64; D], a: usize, edges: &[[usize; 2]]) -> (f64, [f64; D]) {
+    let corners = D + 1;
+    if edges.is_empty() {
+        return barycentric(x, a);
+    }
+    if a < corners {
+        let (l, dl) = barycentric(x, a);
+        (l * (2.0 * l - 1.0), dl.map(|g| (4.0 * l - 1.0) * g))
+    } else {
+        let [i, j] = edges[a - corners];
+        let (li, dli) = barycentric(x, i);
+        let (lj, dlj) = barycentric(x, j);
+        let grad = std::array::from_fn(|k| 4.0 * (lj * dli[k] + li * dlj[k]));
+        (4.0 * li * lj, grad)
+    }
+}
+
+impl ElementType {
+    /// Value and parametric gradient of shape function `a` at `xi`.
+    fn shape_node(self, xi: [f64; 3], a: usize) -> (f64, [f64; 3]) {
+        match self {
+            ElementType::Hex8 => tensor_node(TensorFamily::Linear, xi, HEX_NODES[a]),
+            ElementType::Hex20 => tensor_node(TensorFamily::Serendipity, xi, HEX_NODES[a]),
+            ElementType::Hex27 => tensor_node(TensorFamily::Lagrange, xi, HEX_NODES[a]),
+            ElementType::Tet4 => simplex_node(xi, a, &[]),
+            ElementType::Tet10 => simplex_node(xi, a, ElementType::Tet10.edges()),
+        }
+    }
+
+    /// Shape function values at parametric point xi; n.len() == num_nodes().
+    ///
+    /// # Panics
+    /// If `n.len() != self.num_nodes()`.
+    pub fn shape(self, xi: [f64; 3], n: &mut [f64]) {
+        assert_eq!(n.len(), self.num_nodes(), "shape: wrong buffer length");
+        for (a, na) in n.iter_mut().enumerate() {
+            *na = self.shape_node(xi, a).0;
+        }
+    }
+
+    /// Parametric gradients dN_a/dxi_j; dn.len() == num_nodes().
+    ///
+    /// # Panics
+    /// If `dn.len() != self.num_nodes()`.
+    pub fn shape_grad(self, xi: [f64; 3], dn: &mut [[f64; 3]]) {
+        assert_eq!(
+            dn.len(),
+            self.num_nodes(),
+            "shape_grad: wrong buffer length"
+        );
+        for (a, ga) in dn.iter_mut().enumerate() {
+            *ga = self.shape_node(xi, a).1;
+        }
+    }
+}
+
+impl FaceType {
+    /// Value and parametric gradient of shape function `a` at `xi`.
+    fn shape_node(self, xi: [f64; 2], a: usize) -> (f64, [f64; 2]) {
+        match self {
+            FaceType::Quad4 => tensor_node(TensorFamily::Linear, xi, QUAD_NODES[a]),
+            FaceType::Quad8 => tensor_node(TensorFamily::Serendipity, xi, QUAD_NODES[a]),
+            FaceType::Quad9 => tensor_node(TensorFamily::Lagrange, xi, QUAD_NODES[a]),
+            FaceType::Tri3 => simplex_node(xi, a, &[]),
+            FaceType::Tri6 => simplex_node(xi, a, &TRI_EDGES),
+        }
+    }
+
+    /// Shape function values at parametric point xi; n.len() == num_nodes().
+    ///
+    /// # Panics
+    /// If `n.len() != self.num_nodes()`.
+    pub fn shape(self, xi: [f64; 2], n: &mut [f64]) {
+        assert_eq!(n.len(), self.num_nodes(), "shape: wrong buffer length");
+        for (a, na) in n.iter_mut().enumerate() {
+            *na = self.shape_node(xi, a).0;
+        }
+    }
+
+    /// Parametric gradients dN_a/dxi_j; dn.len() == num_nodes().
+    ///
+    /// # Panics
+    /// If `dn.len() != self.num_nodes()`.
+    pub fn shape_grad(self, xi: [f64; 2], dn: &mut [[f64; 2]]) {
+        assert_eq!(
+            dn.len(),
+            self.num_nodes(),
+            "shape_grad: wrong buffer length"
+        );
+        for (a, ga) in dn.iter_mut().enumerate() {
+            *ga = self.shape_node(xi, a).1;
+        }
+    }
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// Tangent vectors (x_,xi, x_,eta) of a face at xi.
+///
+/// `x` holds the face node coordinates in the face's node order.
+///
+/// # Panics
+/// If `x.len() != ft.num_nodes()`.
+pub fn face_tangents(ft: FaceType, x: &[[f64; 3]], xi: [f64; 2]) -> ([f64; 3], [f64; 3]) {
+    let nn = ft.num_nodes();
+    assert_eq!(
+        x.len(),
+        nn,
+        "face_tangents: wrong number of node coordinates"
+    );
+    let mut dn = [[0.0; 2]; MAX_FACE_NODES];
+    ft.shape_grad(xi, &mut dn[..nn]);
+    let mut t = [[0.0; 3]; 2];
+    for (xa, ga) in x.iter().zip(&dn[..nn]) {
+        for (tk, gk) in t.iter_mut().zip(ga) {
+            for d in 0..3 {
+                tk[d] += gk * xa[d];
+            }
+        }
+    }
+    (t[0], t[1])
+}
+
+/// Surface geometry of a face at parametric point xi given the face node coordinates (in the face's
+/// node order): returns (unit outward normal, surface Jacobian |x_,xi x x_,eta|) where the normal is
+/// normalize(x_,xi x x_,eta). For triangles the Jacobian is relative to the unit triangle (area 1/2).
+///
+/// A degenerate face (zero Jacobian) gives the zero vector as normal and a zero Jacobian.
+///
+/// # Panics
+/// If `x.len() != ft.num_nodes()`.
+pub fn face_normal(ft: FaceType, x: &[[f64; 3]], xi: [f64; 2]) -> ([f64; 3], f64) {
+    let (t1, t2) = face_tangents(ft, x, xi);
+    let c = cross(t1, t2);
+    let jac = c.iter().map(|v| v * v).sum::<f64>().sqrt();
+    if jac > 0.0 {
+        (c.map(|v| v / jac), jac)
+    } else {
+        ([0.0; 3], 0.0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Small deterministic xorshift generator, enough for test points.
+    struct Rng(u64);
+
+    impl Rng {
+        fn uniform(&mut self) -> f64 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+
+        /// A point of the parent domain of `hex`-like (`[-1, 1]^D`) or simplex shape.
+        fn point<const D: usize>(&mut self, cube: bool) -> [f64; D] {
+            loop {
+                let p: [f64; D] = std::array::from_fn(|_| self.uniform());
+                if cube {
+                    return p.map(|t| 2.0 * t - 1.0);
+                }
+                if p.iter().sum::<f64>() <= 1.0 {
+                    return p;
+                }
+            }
+        }
+    }
+
+    const NUM_POINTS: usize = 50;
+
+    fn elem_points(et: ElementType, rng: &mut Rng) -> Vec<[f64; 3]> {
+        (0..NUM_POINTS).map(|_| rng.point(et.is_hex())).collect()
+    }
+
+    fn face_points(ft: FaceType, rng: &mut Rng) -> Vec<[f64; 2]> {
+        (0..NUM_POINTS).map(|_| rng.point(ft.is_quad())).collect()
+    }
+
+    fn elem_eval(et: ElementType, xi: [f64; 3]) -> (Vec<f64>, Vec<[f64; 3]>) {
+        let mut n = vec![0.0; et.num_nodes()];
+        let mut dn = vec![[0.0; 3]; et.num_nodes()];
+        et.shape(xi, &mut n);
+        et.shape_grad(xi, &mut dn);
+        (n, dn)
+    }
+
+    fn face_eval(ft: FaceType, xi: [f64; 2]) -> (Vec<f64>, Vec<[f64; 2]>) {
+        let mut n = vec![0.0; ft.num_nodes()];
+        let mut dn = vec![[0.0; 2]; ft.num_nodes()];
+        ft.shape(xi, &mut n);
+        ft.shape_grad(xi, &mut dn);
+        (n, dn)
+    }
+
+    #[test]
+    fn node_tables_match_element_node_coords() {
+        for et in [ElementType::Hex8, ElementType::Hex20, ElementType::Hex27] {
+            assert_eq!(et.node_coords(), HEX_NODES[..et.num_nodes()].to_vec());
+        }
+        for ft in [FaceType::Quad4, FaceType::Quad8, FaceType::Quad9] {
+            assert_eq!(ft.node_coords(), QUAD_NODES[..ft.num_nodes()].to_vec());
+        }
+    }
+
+    #[test]
+    fn partition_of_unity_and_zero_gradient_sum() {
+        let mut rng = Rng(0x1234_5678_9abc_def1);
+        for et in ElementType::ALL {
+            for xi in elem_points(et, &mut rng) {
+                let (n, dn) = elem_eval(et, xi);
+                assert!(
+                    (n.iter().sum::<f64>() - 1.0).abs() < 1e-14,
+                    "{et:?} at {xi:?}"
+                );
+                for j in 0..3 {
+                    let s: f64 = dn.iter().map(|g| g[j]).sum();
+                    assert!(s.abs() < 1e-14, "{et:?} grad {j} at {xi:?}: {s}");
+                }
+            }
+        }
+        for ft in FaceType::ALL {
+            for xi in face_points(ft, &mut rng) {
+                let (n, dn) = face_eval(ft, xi);
+                assert!(
+                    (n.iter().sum::<f64>() - 1.0).abs() < 1e-14,
+                    "{ft:?} at {xi:?}"
+                );
+                for j in 0..2 {
+                    let s: f64 = dn.iter().map(|g| g[j]).sum();
+                    assert!(s.abs() < 1e-14, "{ft:?} grad {j} at {xi:?}: {s}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn kronecker_property_at_nodes() {
+        for et in ElementType::ALL {
+            for (b, xb) in et.node_coords().into_iter().enumerate() {
+                let (n, _) = elem_eval(et, xb);
+                for (a, na) in n.iter().enumerate() {
+                    let expected = if a == b { 1.0 } else { 0.0 };
+                    assert!((na - expected).abs() < 1e-15, "{et:?} N_{a}(x_{b}) = {na}");
+                }
+            }
+        }
+        for ft in FaceType::ALL {
+            for (b, xb) in ft.node_coords().into_iter().enumerate() {
+                let (n, _) = face_eval(ft, xb);
+                for (a, na) in n.iter().enumerate() {
+                    let expected = if a == b { 1.0 } else { 0.0 };
+                    assert!((na - expected).abs() < 1e-15, "{ft:?} N_{a}(x_{b}) = {na}");
+                }
+            }
+        }
+    }
+
+    const FD_STEP: f64 = 1e-6;
+    const FD_TOL: f64 = 1e-8;
+
+    #[test]
+    fn element_gradients_match_central_differences() {
+        let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+        for et in ElementType::ALL {
+            for xi in elem_points(et, &mut rng) {
+                let (_, dn) = elem_eval(et, xi);
+                for j in 0..3 {
+                    let (mut xp, mut xm) = (xi, xi);
+                    xp[j] += FD_STEP;
+                    xm[j] -= FD_STEP;
+                    let (np, nm) = (elem_eval(et, xp).0, elem_eval(et, xm).0);
+                    for a in 0..et.num_nodes() {
+                        let fd = (np[a] - nm[a]) / (2.0 * FD_STEP);
+                        assert!((fd - dn[a][j]).abs() < FD_TOL, "{et:?} dN_{a}/dxi_{j}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn face_gradients_match_central_differences() {
+        let mut rng = Rng(0xdead_beef_cafe_f00d);
+        for ft in FaceType::ALL {
+            for xi in face_points(ft, &mut rng) {
+                let (_, dn) = face_eval(ft, xi);
+                for j in 0..2 {
+                    let (mut xp, mut xm) = (xi, xi);
+                    xp[j] += FD_STEP;
+                    xm[j] -= FD_STEP;
+                    let (np, nm) = (face_eval(ft, xp).0, face_eval(ft, xm).0);
+                    for a in 0..ft.num_nodes() {
+                        let fd = (np[a] - nm[a]) / (2.0 * FD_STEP);
+                        assert!((fd - dn[a][j]).abs() < FD_TOL, "{ft:?} dN_{a}/dxi_{j}");
+                    }
+                }
+            }
+        }
+    }
+
+    /// Exponents of a monomial `x^e0 y^e1 z^e2`.
+    type Monomial = [i32; 3];
+
+    fn monomial(e: Monomial, x: &[f64]) -> f64 {
+        (0..x.len()).map(|i| x[i].powi(e[i])).product()
+    }
+
+    fn monomial_grad(e: Monomial, x: &[f64], j: usize) -> f64 {
+        if e[j] == 0 {
+            return 0.0;
+        }
+        let mut ed = e;
+        ed[j] -= 1;
+        f64::from(e[j]) * monomial(ed, x)
+    }
+
+    /// Monomials with exponents `<= max` in `dim` variables accepted by `keep`.
+    fn monomials(dim: usize, max: i32, keep: impl Fn(Monomial) -> bool) -> Vec<Monomial> {
+        let top = |i: usize| if i < dim { max } else { 0 };
+        let mut out = Vec::new();
+        for a in 0..=top(0) {
+            for b in 0..=top(1) {
+                for c in 0..=top(2) {
+                    if keep([a, b, c]) {
+                        out.push([a, b, c]);
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// Number of exponents equal to 2 (serendipity spaces allow at most one).
+    fn squares(e: Monomial) -> usize {
+        e.iter().filter(|&&k| k == 2).count()
+    }
+
+    /// The polynomial space of an element (`dim = 3`) or face (`dim = 2`) by family.
+    fn space(
+        dim: usize,
+        linear_tensor: bool,
+        order: usize,
+        serendipity: bool,
+        simplex: bool,
+    ) -> Vec<Monomial> {
+        if simplex {
+            monomials(dim, order as i32, |e| e.iter().sum::<i32>() <= order as i32)
+        } else if linear_tensor {
+            monomials(dim, 1, |_| true)
+        } else if serendipity {
+            monomials(dim, 2, |e| squares(e) <= 1)
+        } else {
+            monomials(dim, 2, |_| true)
+        }
+    }
+
+    fn element_space(et: ElementType) -> Vec<Monomial> {
+        let space = space(
+            3,
+            et == ElementType::Hex8,
+            et.order(),
+            et == ElementType::Hex20,
+            !et.is_hex(),
+        );
+        let expected = [8, 20, 27, 4, 10][ElementType::ALL.iter().position(|&t| t == et).unwrap()];
+        assert_eq!(space.len(), expected, "{et:?}");
+        space
+    }
+
+    fn face_space(ft: FaceType) -> Vec<Monomial> {
+        let order = if matches!(ft, FaceType::Quad4 | FaceType::Tri3) {
+            1
+        } else {
+            2
+        };
+        let space = space(
+            2,
+            ft == FaceType::Quad4,
+            order,
+            ft == FaceType::Quad8,
+            !ft.is_quad(),
+        );
+        assert_eq!(space.len(), ft.num_nodes(), "{ft:?}");
+        space
+    }
+
+    /// A monomial just outside each element's space.
+    fn element_outsider(et: ElementType) -> Monomial {
+        match et {
+            ElementType::Hex8 | ElementType::Tet4 => [2, 0, 0],
+            ElementType::Hex20 => [2, 2, 0],
+            ElementType::Hex27 | ElementType::Tet10 => [3, 0, 0],
+        }
+    }
+
+    fn face_outsider(ft: FaceType) -> Monomial {
+        match ft {
+            FaceType::Quad4 | FaceType::Tri3 => [2, 0, 0],
+            FaceType::Quad8 => [2, 2, 0],
+            FaceType::Quad9 | FaceType::Tri6 => [0, 3, 0],
+        }
+    }
+
+    /// Largest error of interpolating monomial `e` (value and gradient) over the points.
+    fn elem_interpolation_error(et: ElementType, e: Monomial, pts: &[[f64; 3]]) -> f64 {
+        let nodal: Vec<f64> = et.node_coords().iter().map(|x| monomial(e, x)).collect();
+        let mut err: f64 = 0.0;
+        for xi in pts {
+            let (n, dn) = elem_eval(et, *xi);
+            let u: f64 = n.iter().zip(&nodal).map(|(na, ua)| na * ua).sum();
+            err = err.max((u - monomial(e, xi)).abs());
+            for j in 0..3 {
+                let du: f64 = dn.iter().zip(&nodal).map(|(g, ua)| g[j] * ua).sum();
+                err = err.max((du - monomial_grad(e, xi, j)).abs());
+            }
+        }
+        err
+    }
+
+    fn face_interpolation_error(ft: FaceType, e: Monomial, pts: &[[f64; 2]]) -> f64 {
+        let nodal: Vec<f64> = ft.node_coords().iter().map(|x| monomial(e, x)).collect();
+        let mut err: f64 = 0.0;
+        for xi in pts {
+            let (n, dn) = face_eval(ft, *xi);
+            let u: f64 = n.iter().zip(&nodal).map(|(na, ua)| na * ua).sum();
+            err = err.max((u - monomial(e, xi)).abs());
+            for j in 0..2 {
+                let du: f64 = dn.iter().zip(&nodal).map(|(g, ua)| g[j] * ua).sum();
+                err = err.max((du - monomial_grad(e, xi, j)).abs());
+            }
+        }
+        err
+    }
+
+    /// Every monomial of the element's space is interpolated exactly (values and gradients), and
+    /// a monomial outside it is not.
+    #[test]
+    fn elements_reproduce_their_polynomial_space() {
+        let mut rng = Rng(0x0bad_cafe_1234_5679);
+        for et in ElementType::ALL {
+            let pts = elem_points(et, &mut rng);
+            for e in element_space(et) {
+                let err = elem_interpolation_error(et, e, &pts);
+                assert!(err < 1e-13, "{et:?} monomial {e:?}: error {err}");
+            }
+            let out = element_outsider(et);
+            let err = elem_interpolation_error(et, out, &pts);
+            assert!(err > 1e-3, "{et:?} reproduces {out:?}?");
+        }
+    }
+
+    #[test]
+    fn faces_reproduce_their_polynomial_space() {
+        let mut rng = Rng(0x5555_aaaa_3333_cccd);
+        for ft in FaceType::ALL {
+            let pts = face_points(ft, &mut rng);
+            for e in face_space(ft) {
+                let err = face_interpolation_error(ft, e, &pts);
+                assert!(err < 1e-13, "{ft:?} monomial {e:?}: error {err}");
+            }
+            let out = face_outsider(ft);
+            let err = face_interpolation_error(ft, out, &pts);
+            assert!(err > 1e-3, "{ft:?} reproduces {out:?}?");
+        }
+    }
+
+    fn assert_vec_close(a: [f64; 3], b: [f64; 3], tol: f64, what: &str) {
+        for d in 0..3 {
+            assert!((a[d] - b[d]).abs() < tol, "{what}: {a:?} != {b:?}");
+        }
+    }
+
+    /// Area of a face by the face's default quadrature rule.
+    fn face_area(ft: FaceType, x: &[[f64; 3]]) -> f64 {
+        let rule = ft.quadrature(ft.default_quadrature_degree());
+        rule.points
+            .iter()
+            .zip(&rule.weights)
+            .map(|(p, w)| w * face_normal(ft, x, *p).1)
+            .sum()
+    }
+
+    /// Maps parametric face nodes onto a plane through `origin` spanned by the orthonormal `e1`,
+    /// `e2`, with in-plane coordinates given by `planar` (an affine or bilinear map of the
+    /// parametric coordinates that keeps mid-edge nodes on straight edges).
+    fn planar_face(
+        ft: FaceType,
+        origin: [f64; 3],
+        e1: [f64; 3],
+        e2: [f64; 3],
+        corners: &[[f64; 2]],
+    ) -> Vec<[f64; 3]> {
+        let nc = ft.num_corners();
+        ft.node_coords()
+            .iter()
+            .map(|xi| {
+                // In-plane position: interpolate the corners with the linear (Tri3/Quad4) functions.
+                let lin = if ft.is_quad() {
+                    FaceType::Quad4
+                } else {
+                    FaceType::Tri3
+                };
+                let mut n = vec![0.0; nc];
+                lin.shape(*xi, &mut n);
+                let (u, v) = (0..nc).fold((0.0, 0.0), |(u, v), a| {
+                    (u + n[a] * corners[a][0], v + n[a] * corners[a][1])
+                });
+                std::array::from_fn(|d| origin[d] + u * e1[d] + v * e2[d])
+            })
+            .collect()
+    }
+
+    /// Planar faces in a tilted plane: the normal is the plane normal everywhere and the area is
+    /// the polygon area (shoelace).
+    #[test]
+    fn planar_face_normal_and_area() {
+        let s = 1.0 / 3f64.sqrt();
+        let e1 = [1.0 / 2f64.sqrt(), -1.0 / 2f64.sqrt(), 0.0];
+        let e2 = [1.0 / 6f64.sqrt(), 1.0 / 6f64.sqrt(), -2.0 / 6f64.sqrt()];
+        let normal = cross(e1, e2);
+        assert_vec_close(normal, [s, s, s], 1e-15, "plane basis");
+        let origin = [0.3, -1.2, 2.5];
+        let quad = [[0.0, 0.0], [2.0, 0.1], [2.5, 1.7], [-0.4, 1.2]];
+        let tri = [[0.1, 0.2], [2.0, -0.3], [0.7, 1.9]];
+        let shoelace = |c: &[[f64; 2]]| {
+            0.5 * (0..c.len())
+                .map(|k| {
+                    let (a, b) = (c[k], c[(k + 1) % c.len()]);
+                    a[0] * b[1] - b[0] * a[1]
+                })
+                .sum::<f64>()
+        };
+        let mut rng = Rng(0x7777_1111_2222_3333);
+        for ft in FaceType::ALL {
+            let corners: &[[f64; 2]] = if ft.is_quad() { &quad } else { &tri };
+            let x = planar_face(ft, origin, e1, e2, corners);
+            for xi in face_points(ft, &mut rng) {
+                let (n, jac) = face_normal(ft, &x, xi);
+                assert_vec_close(n, normal, 1e-14, ft.name());
+                assert!(jac > 0.0);
+            }
+            let area = face_area(ft, &x);
+            let exact = shoelace(corners);
+            assert!(
+                (area - exact).abs() < 1e-13 * exact,
+                "{ft:?}: area {area} != {exact}"
+            );
+        }
+    }
+
+    /// On the faces of the parent hexahedron (face order `xi = -1, +1, eta = -1, +1, zeta = -1,
+    /// +1`) and parent tetrahedron the normals point outward along the right axis and the areas are
+    /// exact.
+    #[test]
+    fn parent_element_faces_have_outward_normals() {
+        let s = 1.0 / 3f64.sqrt();
+        let hex_normals = [
+            [-1.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, -1.0],
+            [0.0, 0.0, 1.0],
+        ];
+        let tet_normals = [
+            [0.0, 0.0, -1.0],
+            [0.0, -1.0, 0.0],
+            [-1.0, 0.0, 0.0],
+            [s, s, s],
+        ];
+        let tet_areas = [0.5, 0.5, 0.5, 0.5 * 3f64.sqrt()];
+        let mut rng = Rng(0x4242_4242_4242_4243);
+        for et in ElementType::ALL {
+            let xe = et.node_coords();
+            let ft = et.face_type();
+            for f in 0..et.num_faces() {
+                let x: Vec<[f64; 3]> = et.face_nodes(f).iter().map(|&a| xe[a]).collect();
+                let (expected, exact_area) = if et.is_hex() {
+                    (hex_normals[f], 4.0)
+                } else {
+                    (tet_normals[f], tet_areas[f])
+                };
+                for xi in face_points(ft, &mut rng) {
+                    let (n, _) = face_normal(ft, &x, xi);
+                    assert_vec_close(n, expected, 1e-14, &format!("{et:?} face {f}"));
+                }
+                let area = face_area(ft, &x);
+                assert!(
+                    (area - exact_area).abs() < 1e-13,
+                    "{et:?} face {f}: area {area}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn degenerate_face_gives_zero_normal() {
+        let x = [[1.0, 2.0, 3.0]; 3];
+        assert_eq!(face_normal(FaceType::Tri3, &x, [0.2, 0.3]), ([0.0; 3], 0.0));
+    }
+}

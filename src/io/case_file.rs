@@ -1,0 +1,333 @@
+//! The case file (`case.toml`): every key a scene may set, documented where it is declared.
+//!
+//! Unknown keys are rejected (`deny_unknown_fields`), so a typo is an error naming the key, not
+//! a silently ignored setting. Paths are relative to the case file's folder. Validation of values
+//! (E > 0, sets that exist, ...) happens in `crate::case`, which turns this file into a scene.
+//!
+//! ```toml
+//! name = "thick_sphere"          # scene name (summary.json "case")
+//! petsc_options = "petscrc"      # PETSc options file, read before the command line
+//!
+//! [[mesh]]                       # one or more parts, merged in order
+//! body = "sphere"                # body name; generated sets are called "<body>.<set>"
+//! generator = "thick_sphere_octant"
+//! element = "hex20"
+//! n_circ = 2
+//! n_rad = 2
+//! inner_radius = 1.0
+//! outer_radius = 2.0
+//!
+//! [[material]]
+//! body = "sphere"
+//! model = "linear_elastic"       # or "neo_hookean"
+//! young = 1000.0
+//! poisson = 0.3
+//!
+//! [[symmetry]]
+//! set = "sphere.symx"
+//! normal = "x"
+//!
+//! [[pressure]]
+//! set = "sphere.inner"
+//! value = 1.0
+//!
+//! [steps]
+//! count = 1
+//! ```
+
+use std::path::Path;
+
+use serde::Deserialize;
+
+use crate::error::{Error, Result};
+
+/// The whole case file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CaseFile {
+    /// Scene name, written as `case` in summary.json. Default: the case folder's name.
+    pub name: Option<String>,
+    /// PETSc options file (relative to the case file), read before the command line so command
+    /// line options win. Optional.
+    pub petsc_options: Option<String>,
+    /// Mesh parts, merged in order into one mesh. At least one.
+    pub mesh: Vec<MeshPart>,
+    /// One material per body.
+    #[serde(default)]
+    pub material: Vec<MaterialSpec>,
+    /// Prescribed displacements.
+    #[serde(default)]
+    pub dirichlet: Vec<DirichletSpec>,
+    /// Symmetry planes: the normal displacement component is zero on the set.
+    #[serde(default)]
+    pub symmetry: Vec<SymmetrySpec>,
+    /// Follower pressures on face sets.
+    #[serde(default)]
+    pub pressure: Vec<PressureSpec>,
+    /// Body forces per unit reference volume.
+    #[serde(default)]
+    pub body_force: Vec<BodyForceSpec>,
+    /// Load stepping.
+    #[serde(default)]
+    pub steps: StepsSpec,
+    /// Newton settings (PETSc's `-snes_*` options override them).
+    #[serde(default)]
+    pub newton: NewtonSpec,
+    /// Output settings.
+    #[serde(default)]
+    pub output: OutputSpec,
+    /// Exact solution the run is measured against (optional).
+    pub verification: Option<VerificationSpec>,
+}
+
+/// One mesh part: a generator or a Gmsh file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshPart {
+    /// Body name for generated parts (their sets become `<body>.<set>`). Gmsh parts take their
+    /// bodies from 3D physical groups and their set names as written in the file.
+    #[serde(default = "default_body")]
+    pub body: String,
+    /// `"box"`, `"beam"`, `"thick_sphere_octant"` or `"gmsh"`.
+    pub generator: String,
+    /// Element type of generated parts: `hex8`, `hex20`, `hex27`, `tet4`, `tet10`.
+    pub element: Option<String>,
+    /// box, beam: elements along x, y, z.
+    pub divisions: Option<[usize; 3]>,
+    /// box: lower corner.
+    pub lo: Option<[f64; 3]>,
+    /// box: upper corner.
+    pub hi: Option<[f64; 3]>,
+    /// beam: length (x), width (y), height (z).
+    pub length: Option<f64>,
+    pub width: Option<f64>,
+    pub height: Option<f64>,
+    /// thick_sphere_octant: elements along each side of each of the three surface patches.
+    pub n_circ: Option<usize>,
+    /// thick_sphere_octant: elements through the thickness.
+    pub n_rad: Option<usize>,
+    /// thick_sphere_octant: radii.
+    pub inner_radius: Option<f64>,
+    pub outer_radius: Option<f64>,
+    /// gmsh: the .msh file (format 4.1, ASCII or binary).
+    pub file: Option<String>,
+    /// Moves every node of the part by this vector after generation. Default: none.
+    pub translate: Option<[f64; 3]>,
+    /// Perturbs interior nodes of a generated part by up to this fraction of the local element
+    /// size (deterministic pseudo-random), to test distorted meshes. Default 0.
+    #[serde(default)]
+    pub distort: f64,
+}
+
+fn default_body() -> String {
+    "body".to_string()
+}
+
+/// A material for one body.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSpec {
+    /// Body name. May be omitted when the mesh has one body.
+    pub body: Option<String>,
+    /// `"linear_elastic"` (small strain) or `"neo_hookean"` (compressible, finite strain).
+    pub model: String,
+    /// Young's modulus, > 0.
+    pub young: f64,
+    /// Poisson's ratio, in (-1, 0.5).
+    pub poisson: f64,
+}
+
+/// How a boundary value evolves with the load factor t in [0, 1] (pseudo-time).
+#[derive(Debug, Clone, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct LoadCurveSpec {
+    /// `"ramp"` (value * t, the default), `"constant"` (value at every step) or `"table"`.
+    pub kind: Option<String>,
+    /// For `"table"`: `[[t0, f0], [t1, f1], ...]` with increasing t; linear in between, constant
+    /// outside; the value applied is value * f(t).
+    pub table: Option<Vec<[f64; 2]>>,
+}
+
+/// Prescribed displacement components on a node or face set.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DirichletSpec {
+    /// Node set or face set name.
+    pub set: String,
+    /// Components fixed: any of `"x"`, `"y"`, `"z"`.
+    pub components: Vec<String>,
+    /// Displacement at full load for each listed component (same order). Default: zeros.
+    pub value: Option<Vec<f64>>,
+    /// Instead of `value`: the displacement at full load is the linear field u = G X with this
+    /// gradient G (row-major 3x3), evaluated at each node (used by patch tests).
+    pub gradient: Option<[[f64; 3]; 3]>,
+    /// Load curve. Default: ramp.
+    #[serde(default)]
+    pub curve: LoadCurveSpec,
+}
+
+/// A symmetry plane through a set: zero displacement along `normal`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SymmetrySpec {
+    /// Node set or face set on the plane.
+    pub set: String,
+    /// Plane normal axis: `"x"`, `"y"` or `"z"` (planes are axis-aligned).
+    pub normal: String,
+}
+
+/// Follower pressure (positive compresses: it acts against the current outward normal).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PressureSpec {
+    /// Face set name.
+    pub set: String,
+    /// Pressure at full load.
+    pub value: f64,
+    /// true (default): a follower load on the current face (finite strain, with its tangent);
+    /// false: a dead load on the reference face (what small-strain linear theory assumes).
+    #[serde(default = "yes")]
+    pub follower: bool,
+    /// Load curve. Default: ramp.
+    #[serde(default)]
+    pub curve: LoadCurveSpec,
+}
+
+/// Body force per unit reference volume.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodyForceSpec {
+    /// Body name. Default: every body.
+    pub body: Option<String>,
+    /// Force vector at full load.
+    pub value: [f64; 3],
+    /// Load curve. Default: ramp.
+    #[serde(default)]
+    pub curve: LoadCurveSpec,
+}
+
+/// Load stepping: the load factor goes from 0 to 1 in `count` equal steps.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StepsSpec {
+    /// Number of load steps. Default 1.
+    #[serde(default = "one")]
+    pub count: usize,
+    /// How many times a step may be halved after a failed solve before the run stops. Default 6.
+    #[serde(default = "six")]
+    pub max_cuts: usize,
+}
+
+impl Default for StepsSpec {
+    fn default() -> Self {
+        StepsSpec {
+            count: 1,
+            max_cuts: 6,
+        }
+    }
+}
+
+fn yes() -> bool {
+    true
+}
+
+fn one() -> usize {
+    1
+}
+fn six() -> usize {
+    6
+}
+
+/// Newton tolerances (overridden by `-snes_rtol`, `-snes_atol`, `-snes_stol`, `-snes_max_it`).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NewtonSpec {
+    /// Relative residual tolerance. Default 1e-10.
+    #[serde(default = "default_rtol")]
+    pub rtol: f64,
+    /// Absolute residual tolerance, relative to the norm of the full external load (or of the
+    /// first residual when there is none). Default 1e-12.
+    #[serde(default = "default_atol")]
+    pub atol: f64,
+    /// Maximum Newton iterations per step. Default 25.
+    #[serde(default = "default_max_it")]
+    pub max_it: usize,
+}
+
+impl Default for NewtonSpec {
+    fn default() -> Self {
+        NewtonSpec {
+            rtol: default_rtol(),
+            atol: default_atol(),
+            max_it: default_max_it(),
+        }
+    }
+}
+
+fn default_rtol() -> f64 {
+    1e-10
+}
+fn default_atol() -> f64 {
+    1e-12
+}
+fn default_max_it() -> usize {
+    25
+}
+
+/// Output settings.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSpec {
+    /// Write VTU files every this many converged steps (the last step is always written).
+    /// 0 writes none. Default 1.
+    #[serde(default = "one")]
+    pub vtu_every: usize,
+    /// Sets whose reaction forces go into the history (node or face sets with constrained
+    /// dofs). Default: every set named in `dirichlet` and `symmetry`.
+    pub reactions: Option<Vec<String>>,
+}
+
+impl Default for OutputSpec {
+    fn default() -> Self {
+        OutputSpec {
+            vtu_every: 1,
+            reactions: None,
+        }
+    }
+}
+
+/// An exact solution to measure the run against.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VerificationSpec {
+    /// `"lame_sphere"` (thick sphere under inner pressure; the metric `energy_error`) or
+    /// `"uniform_strain"` (a linear displacement field u = G X; metrics `max_displacement_error`
+    /// and `max_stress_error`).
+    pub kind: String,
+    /// lame_sphere: inner and outer radius and inner pressure.
+    pub inner_radius: Option<f64>,
+    pub outer_radius: Option<f64>,
+    pub pressure: Option<f64>,
+    /// uniform_strain: the displacement gradient G (row-major 3x3).
+    pub gradient: Option<[[f64; 3]; 3]>,
+}
+
+impl CaseFile {
+    /// Reads and parses a case file; errors name the file and the offending key.
+    pub fn read(path: &Path) -> Result<CaseFile> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        toml::from_str(&text).map_err(|e| Error::Case {
+            file: path.to_path_buf(),
+            msg: one_line(&e.to_string()),
+        })
+    }
+}
+
+/// Folds a multi-line parser message (toml shows the offending line) into one line.
+fn one_line(s: &str) -> String {
+    s.lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && !l.chars().all(|c| c == '|' || c == '^' || c == ' '))
+        .collect::<Vec<_>>()
+        .join(" ")
+}

@@ -1,0 +1,27 @@
+//! `mortar`: mortar segment-to-segment frictional contact between deforming solids
+//! (Puso, Laursen & Solberg 2004), on PETSc and MPI.
+//!
+//! Modules by concern:
+//! - [`petsc`]: the only unsafe code outside `ffi/`: PETSc objects with RAII, errors as `Result`.
+//! - [`mesh`]: meshes, generators, partitioning.
+//! - [`fe`]: element topology, shape functions, quadrature.
+//! - [`material`]: constitutive laws (physics only).
+//! - [`solid`]: element residuals and tangents of the bulk, surface loads.
+//! - [`dofs`]: ownership, PETSc numbering, ghosts and sparsity.
+//! - [`solver`]: load stepping, Newton through SNES, step cutting.
+//! - [`io`]: case files, Gmsh import, VTU/PVD output, CSV history, summary.
+//! - [`case`]: the validated scene a run is made of.
+
+pub mod case;
+pub mod dofs;
+pub mod error;
+pub mod fe;
+pub mod io;
+pub mod material;
+pub mod mesh;
+pub mod petsc;
+pub mod solid;
+pub mod solver;
+pub mod verify;
+
+pub use error::{Error, Result};

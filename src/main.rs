@@ -1,0 +1,146 @@
+//! The `mortar` command line.
+//!
+//! ```text
+//! mortar run CASE.toml [--out DIR] [--quiet] [PETSc options...]
+//! mortar check CASE.toml
+//! ```
+//!
+//! Options with two dashes are ours; everything after the case file that is not ours goes to
+//! PETSc's options database unchanged (`-snes_monitor`, `-ksp_type gmres`, `-log_view`, ...).
+//! Run under `mpirun -n N` for N ranks; without mpirun it is one rank. Any error ends with one
+//! line on stderr (from rank 0, or from the rank that failed) and exit code 1.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+use mortar::case::Scene;
+use mortar::petsc::Petsc;
+use mortar::solver::{run, RunOptions};
+use mortar::{Error, Result};
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "mortar",
+    version,
+    about = "Mortar frictional contact on PETSc and MPI"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Runs a scene. PETSc options may follow the case file.
+    Run {
+        /// The case file (case.toml).
+        case: PathBuf,
+        /// Output folder. Default: out/<case name>.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// No progress lines.
+        #[arg(long, short)]
+        quiet: bool,
+        /// PETSc options, passed to PETSc unchanged.
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        petsc: Vec<String>,
+    },
+    /// Validates a scene and its mesh; solves nothing.
+    Check {
+        /// The case file (case.toml).
+        case: PathBuf,
+    },
+}
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().collect();
+    let program = args.first().cloned().unwrap_or_else(|| "mortar".into());
+    let cli = match Cli::try_parse_from(pull_our_options(&args)) {
+        Ok(c) => c,
+        Err(e) => {
+            let _ = e.print();
+            return if e.use_stderr() {
+                ExitCode::FAILURE
+            } else {
+                ExitCode::SUCCESS
+            };
+        }
+    };
+    match execute(cli, program) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("mortar: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Moves `--out DIR` and `--quiet` found among the PETSc options (after the case file) in front
+/// of the case file, so clap sees them whatever their position.
+fn pull_our_options(args: &[String]) -> Vec<String> {
+    let Some(run_at) = args.iter().position(|a| a == "run") else {
+        return args.to_vec();
+    };
+    let mut head: Vec<String> = args[..=run_at].to_vec();
+    let mut rest: Vec<String> = Vec::new();
+    let mut it = args[run_at + 1..].iter();
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "--out" => {
+                head.push(a.clone());
+                if let Some(v) = it.next() {
+                    head.push(v.clone());
+                }
+            }
+            s if s.starts_with("--out=") || s == "--quiet" || s == "-q" => head.push(a.clone()),
+            _ => rest.push(a.clone()),
+        }
+    }
+    head.extend(rest);
+    head
+}
+
+fn execute(cli: Cli, program: String) -> Result<()> {
+    match cli.command {
+        Command::Check { case } => {
+            let scene = Scene::load(&case)?;
+            println!(
+                "mortar: {} is valid: {} nodes, {} elements, {} bodies, {} constrained dofs",
+                case.display(),
+                scene.mesh.num_nodes(),
+                scene.mesh.num_elements(),
+                scene.mesh.bodies.len(),
+                scene.constraints.len()
+            );
+            Ok(())
+        }
+        Command::Run {
+            case,
+            out,
+            quiet,
+            petsc,
+        } => {
+            // Every rank reads the case; all ranks fail alike on bad input.
+            let scene = Scene::load(&case)?;
+            let mut petsc_args = vec![program];
+            petsc_args.extend(petsc);
+            let petsc = Petsc::initialize(&petsc_args, scene.petsc_options.as_deref())?;
+            let out_dir = out.unwrap_or_else(|| default_out(&scene.name));
+            let result = run(&scene, &petsc, &RunOptions { out_dir, quiet });
+            if let Err(e) = &result {
+                // Only one line per failure: other ranks stay quiet unless the error is theirs.
+                if petsc.rank() != 0 && !matches!(e, Error::Petsc { .. }) {
+                    drop(petsc);
+                    std::process::exit(1);
+                }
+            }
+            result.map(|_| ())
+        }
+    }
+}
+
+fn default_out(name: &str) -> PathBuf {
+    Path::new("out").join(name)
+}

@@ -1,0 +1,126 @@
+//! The initialization guard: MPI first (rsmpi), then PETSc; PETSc finalized before MPI.
+
+use std::ffi::CString;
+use std::os::raw::c_char;
+use std::path::Path;
+
+use mpi::topology::Communicator;
+use petsc_ffi as p;
+
+use super::chk;
+use crate::error::{Error, Result};
+
+/// Owns MPI and PETSc for the life of the program. Create exactly one, early in `main`.
+pub struct Petsc {
+    // Keep the argv strings alive: PETSc keeps pointers to them (PetscGetArgs).
+    _args: Vec<CString>,
+    _argv: Vec<*mut c_char>,
+    universe: mpi::environment::Universe,
+}
+
+impl Petsc {
+    /// Initializes MPI and PETSc. `args` is the program name followed by the PETSc options;
+    /// `options_file` (the scene's options) is read by PETSc before the command line, so command
+    /// line options win.
+    pub fn initialize(args: &[String], options_file: Option<&Path>) -> Result<Petsc> {
+        check_sizes()?;
+        let universe = mpi::initialize()
+            .ok_or_else(|| Error::Other("MPI was already initialized in this process".into()))?;
+        let c_args: Vec<CString> = args
+            .iter()
+            .map(|a| {
+                CString::new(a.as_str())
+                    .map_err(|_| Error::Other(format!("argument '{a}' contains a NUL byte")))
+            })
+            .collect::<Result<_>>()?;
+        let mut argv: Vec<*mut c_char> = c_args.iter().map(|c| c.as_ptr() as *mut c_char).collect();
+        argv.push(std::ptr::null_mut());
+        let mut argc = c_args.len() as i32;
+        let mut argv_ptr = argv.as_mut_ptr();
+        let file = match options_file {
+            Some(f) => {
+                if !f.is_file() {
+                    return Err(Error::Other(format!(
+                        "PETSc options file {} does not exist",
+                        f.display()
+                    )));
+                }
+                Some(CString::new(f.to_string_lossy().as_bytes()).map_err(|_| {
+                    Error::Other(format!("options file path {} has a NUL byte", f.display()))
+                })?)
+            }
+            None => None,
+        };
+        let file_ptr = file.as_ref().map_or(std::ptr::null(), |c| c.as_ptr());
+        // The error handler must be in place before PetscInitialize reads the options file, but
+        // PETSc resets handlers during initialization, so push it right after as well.
+        chk!(PetscInitialize(
+            &mut argc,
+            &mut argv_ptr,
+            file_ptr,
+            std::ptr::null()
+        ))?;
+        chk!(PetscPushErrorHandler(
+            Some(super::error::capture_error),
+            std::ptr::null_mut()
+        ))?;
+        Ok(Petsc {
+            _args: c_args,
+            _argv: argv,
+            universe,
+        })
+    }
+
+    /// The world communicator of rsmpi.
+    pub fn world(&self) -> mpi::topology::SimpleCommunicator {
+        self.universe.world()
+    }
+
+    /// This process's rank.
+    pub fn rank(&self) -> usize {
+        self.universe.world().rank() as usize
+    }
+
+    /// Number of ranks.
+    pub fn size(&self) -> usize {
+        self.universe.world().size() as usize
+    }
+}
+
+impl Drop for Petsc {
+    fn drop(&mut self) {
+        // SAFETY: every PETSc object owned by the program is dropped before this guard (it is
+        // created first in main and dropped last). A finalize error cannot be returned from
+        // Drop; print it rather than lose it.
+        let code = unsafe { p::PetscFinalize() };
+        if code != 0 {
+            eprintln!("warning: PetscFinalize returned error code {code}");
+        }
+        // `universe` drops after this, calling MPI_Finalize.
+    }
+}
+
+/// Asserts that PETSc was compiled with the index and scalar sizes the bindings assume.
+fn check_sizes() -> Result<()> {
+    // SAFETY: plain functions returning sizeof values.
+    let (int, scalar, real) = unsafe {
+        (
+            p::petsc_ffi_sizeof_petscint(),
+            p::petsc_ffi_sizeof_petscscalar(),
+            p::petsc_ffi_sizeof_petscreal(),
+        )
+    };
+    let want = (
+        std::mem::size_of::<p::PetscInt>(),
+        std::mem::size_of::<f64>(),
+        std::mem::size_of::<f64>(),
+    );
+    if (int, scalar, real) != want || std::mem::size_of::<p::PetscScalar>() != 8 {
+        return Err(Error::Other(format!(
+            "PETSc build mismatch: PetscInt {int} bytes, PetscScalar {scalar}, PetscReal {real}; \
+             the bindings assume {} / 8 / 8 (real double, 32-bit indices)",
+            want.0
+        )));
+    }
+    Ok(())
+}

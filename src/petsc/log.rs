@@ -1,0 +1,91 @@
+//! PETSc log stages, so `-log_view` shows where time goes, and wall-clock timers for
+//! `summary.json`.
+
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+use petsc_ffi as p;
+
+use super::chk;
+use crate::error::Result;
+
+/// A registered PETSc log stage.
+#[derive(Clone, Copy, Debug)]
+pub struct Stage(p::PetscLogStage);
+
+impl Stage {
+    /// Registers a stage under `name` (shown by `-log_view`).
+    pub fn register(name: &str) -> Result<Stage> {
+        let c = std::ffi::CString::new(name).expect("stage names have no NUL");
+        let mut id: p::PetscLogStage = 0;
+        chk!(PetscLogStageRegister(c.as_ptr(), &mut id))?;
+        Ok(Stage(id))
+    }
+
+    /// Pushes the stage; it is popped when the guard drops.
+    pub fn push(self) -> Result<StageGuard> {
+        chk!(PetscLogStagePush(self.0))?;
+        Ok(StageGuard)
+    }
+}
+
+/// Pops the current log stage on drop.
+pub struct StageGuard;
+
+impl Drop for StageGuard {
+    fn drop(&mut self) {
+        // SAFETY: paired with the push in `Stage::push`.
+        let code = unsafe { p::PetscLogStagePop() };
+        if code != 0 {
+            eprintln!("warning: PetscLogStagePop returned error code {code}");
+        }
+    }
+}
+
+/// Named phases, each a PETSc log stage and an accumulated wall-clock time.
+#[derive(Debug, Default)]
+pub struct Phases {
+    stages: BTreeMap<&'static str, Stage>,
+    seconds: BTreeMap<&'static str, f64>,
+}
+
+impl Phases {
+    /// Registers one stage per phase name.
+    pub fn new(names: &[&'static str]) -> Result<Phases> {
+        let mut ph = Phases::default();
+        for &n in names {
+            ph.stages.insert(n, Stage::register(n)?);
+            ph.seconds.insert(n, 0.0);
+        }
+        Ok(ph)
+    }
+
+    /// Runs `f` inside phase `name`, timing it.
+    pub fn run<R>(&mut self, name: &'static str, f: impl FnOnce() -> R) -> Result<R> {
+        let guard = match self.stages.get(name) {
+            Some(s) => Some(s.push()?),
+            None => None,
+        };
+        let t = Instant::now();
+        let out = f();
+        *self.seconds.entry(name).or_insert(0.0) += t.elapsed().as_secs_f64();
+        drop(guard);
+        Ok(out)
+    }
+
+    /// Pushes the PETSc log stage of phase `name` (popped when the guard drops); time it with
+    /// [`Phases::add`].
+    pub fn push(&self, name: &'static str) -> Result<Option<StageGuard>> {
+        self.stages.get(name).map(|s| s.push()).transpose()
+    }
+
+    /// Adds time measured elsewhere to a phase.
+    pub fn add(&mut self, name: &'static str, seconds: f64) {
+        *self.seconds.entry(name).or_insert(0.0) += seconds;
+    }
+
+    /// Seconds per phase so far.
+    pub fn seconds(&self) -> &BTreeMap<&'static str, f64> {
+        &self.seconds
+    }
+}

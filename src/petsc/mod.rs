@@ -1,0 +1,67 @@
+//! The safe PETSc layer: the only unsafe code outside `ffi/`.
+//!
+//! - [`Petsc`] is the one initialization guard: rsmpi initializes MPI, then `PetscInitialize`
+//!   receives the real argv (so `-snes_monitor`, `-ksp_type ...` reach PETSc's options database)
+//!   and the scene's options file; dropping it calls `PetscFinalize`, then MPI is finalized.
+//! - Every PETSc object ([`Vector`], [`Matrix`], [`Scatter`], [`Snes`]) is destroyed in `Drop`.
+//! - Every PETSc error code becomes an [`Error::Petsc`](crate::Error::Petsc) carrying PETSc's own
+//!   message (captured by an error handler pushed at start-up, which keeps PETSc from printing its
+//!   traceback: the error is reported once, in one line) and the Rust location of the call.
+//! - SNES residual and Jacobian are Rust closures; a panic inside one is caught at the C boundary
+//!   and re-raised after `SNESSolve` returns (see [`snes`]).
+//!
+//! The bindings assume 32-bit `PetscInt` and 64-bit real `PetscScalar`; [`Petsc::initialize`]
+//! asserts both against what PETSc was compiled with.
+
+mod error;
+mod init;
+pub mod log;
+mod matrix;
+pub mod options;
+mod scatter;
+pub mod snes;
+mod vector;
+
+pub use error::check;
+pub use init::Petsc;
+pub use matrix::{Matrix, Sparsity};
+pub use scatter::Scatter;
+pub use snes::{CallbackError, Snes, SnesOutcome};
+pub use vector::Vector;
+
+/// PETSc's index type (32-bit in Debian's build; asserted at start-up).
+pub type PetscInt = petsc_ffi::PetscInt;
+
+/// Calls a PETSc function and turns its error code into a `Result` naming the function and the
+/// Rust location: `chk!(VecSetValues(v, n, idx, vals, mode))?`.
+macro_rules! chk {
+    ($fun:ident ( $($arg:expr),* $(,)? )) => {
+        $crate::petsc::check(
+            #[allow(unused_unsafe)]
+            unsafe { petsc_ffi::$fun($($arg),*) },
+            stringify!($fun),
+        )
+    };
+}
+pub(crate) use chk;
+
+/// Converts a count or index to `PetscInt`, failing clearly past 2^31.
+pub fn to_petsc_int(n: usize) -> crate::Result<PetscInt> {
+    PetscInt::try_from(n).map_err(|_| {
+        crate::Error::Other(format!(
+            "index {n} exceeds PetscInt (32-bit in this PETSc build)"
+        ))
+    })
+}
+
+/// The world communicator as PETSc sees it.
+pub fn comm_world() -> petsc_ffi::MPI_Comm {
+    // SAFETY: returns a constant handle; valid after MPI_Init.
+    unsafe { petsc_ffi::petsc_ffi_comm_world() }
+}
+
+/// The self communicator.
+pub fn comm_self() -> petsc_ffi::MPI_Comm {
+    // SAFETY: returns a constant handle; valid after MPI_Init.
+    unsafe { petsc_ffi::petsc_ffi_comm_self() }
+}

@@ -1,0 +1,323 @@
+//! Newton's method through PETSc's SNES, with the residual and Jacobian as Rust closures.
+//!
+//! The closures are handed to [`Snes::solve`] for the duration of one solve, through a context
+//! on the Rust stack. Each C callback (a trampoline) wraps the closure in `catch_unwind`: a panic
+//! never unwinds into PETSc; it is stored, PETSc is told the callback failed, and the panic is
+//! re-raised after `SNESSolve` returns. An error a closure returns is stored and returned the
+//! same way. A [`CallbackError::Domain`] (an inverted element, a NaN) is reported to PETSc with
+//! `SNESSetFunctionDomainError` / `SNESSetJacobianDomainError`, so the line search can back off
+//! or the solve ends with `SNES_DIVERGED_FUNCTION_DOMAIN` and the step is cut.
+//!
+//! Defaults set here, all overridable from the options database: Newton with a backtracking
+//! line search (`newtonls`, `bt`), a direct solve (`preonly` + `lu` through MUMPS, which does not
+//! need symmetry and gives the same answer on any number of ranks).
+
+use std::any::Any;
+use std::os::raw::c_void;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+
+use petsc_ffi as p;
+
+use super::{chk, Matrix, PetscInt, Vector};
+use crate::error::{Error, Result};
+
+/// How a residual or Jacobian evaluation failed.
+#[derive(Debug)]
+pub enum CallbackError {
+    /// The state is outside the domain of the function (inverted element, NaN): recoverable by a
+    /// shorter Newton step or a smaller load step.
+    Domain(String),
+    /// Anything else: the solve stops and this error is returned.
+    Fatal(Error),
+}
+
+impl From<Error> for CallbackError {
+    fn from(e: Error) -> Self {
+        CallbackError::Fatal(e)
+    }
+}
+
+/// What one nonlinear solve did.
+#[derive(Clone, Debug)]
+pub struct SnesOutcome {
+    /// True for a positive converged reason.
+    pub converged: bool,
+    /// PETSc's converged reason, as its name.
+    pub reason: &'static str,
+    /// Newton iterations.
+    pub iterations: usize,
+    /// Linear iterations over the solve.
+    pub linear_iterations: usize,
+    /// Residual 2-norm before each iteration and at the end.
+    pub residual_history: Vec<f64>,
+    /// The last domain error reported by a callback, if any.
+    pub domain_error: Option<String>,
+}
+
+/// Newton settings that a scene sets; `-snes_*` options override them.
+#[derive(Clone, Copy, Debug)]
+pub struct Tolerances {
+    pub atol: f64,
+    pub rtol: f64,
+    pub stol: f64,
+    pub max_it: usize,
+}
+
+type ResidualFn<'a> = dyn FnMut(&Vector, &mut Vector) -> Result<(), CallbackError> + 'a;
+type JacobianFn<'a> = dyn FnMut(&Vector, &mut Matrix) -> Result<(), CallbackError> + 'a;
+
+enum Failure {
+    Panic(Box<dyn Any + Send>),
+    Error(Error),
+}
+
+struct Context<'a> {
+    residual: &'a mut ResidualFn<'a>,
+    jacobian: &'a mut JacobianFn<'a>,
+    failure: Option<Failure>,
+    domain_error: Option<String>,
+}
+
+/// A PETSc nonlinear solver; destroyed on drop.
+pub struct Snes {
+    raw: p::SNES,
+    history: Vec<f64>,
+}
+
+impl Snes {
+    /// A Newton solver with the project's defaults, then `SNESSetFromOptions`.
+    pub fn new(tol: Tolerances) -> Result<Snes> {
+        let mut raw: p::SNES = std::ptr::null_mut();
+        chk!(SNESCreate(super::comm_world(), &mut raw))?;
+        let snes = Snes {
+            raw,
+            history: vec![0.0; tol.max_it + 2],
+        };
+        chk!(SNESSetType(snes.raw, c"newtonls".as_ptr()))?;
+        let mut ksp: p::KSP = std::ptr::null_mut();
+        chk!(SNESGetKSP(snes.raw, &mut ksp))?;
+        chk!(KSPSetType(ksp, c"preonly".as_ptr()))?;
+        let mut pc: p::PC = std::ptr::null_mut();
+        chk!(KSPGetPC(ksp, &mut pc))?;
+        chk!(PCSetType(pc, c"lu".as_ptr()))?;
+        chk!(PCFactorSetMatSolverType(pc, c"mumps".as_ptr()))?;
+        chk!(SNESSetTolerances(
+            snes.raw,
+            tol.atol,
+            tol.rtol,
+            tol.stol,
+            super::to_petsc_int(tol.max_it)?,
+            -1
+        ))?;
+        chk!(SNESSetFromOptions(snes.raw))?;
+        let mut max_it: PetscInt = 0;
+        let mut max_f: PetscInt = 0;
+        chk!(SNESGetTolerances(
+            snes.raw,
+            std::ptr::null_mut(),
+            std::ptr::null_mut(),
+            std::ptr::null_mut(),
+            &mut max_it,
+            &mut max_f
+        ))?;
+        let mut snes = snes;
+        snes.history = vec![0.0; max_it.max(1) as usize + 2];
+        Ok(snes)
+    }
+
+    /// Solves F(x) = 0 from the initial guess in `x` (overwritten by the solution).
+    ///
+    /// `residual(x, f)` writes F(x) into `f`; `jacobian(x, J)` assembles dF/dx into `J` (the
+    /// matrix passed here, whose pattern must hold every entry). Closures that share state can
+    /// hold it in a `RefCell`.
+    pub fn solve<'a>(
+        &mut self,
+        x: &mut Vector,
+        jac: &mut Matrix,
+        residual: &'a mut ResidualFn<'a>,
+        jacobian: &'a mut JacobianFn<'a>,
+    ) -> Result<SnesOutcome> {
+        let mut ctx = Context {
+            residual,
+            jacobian,
+            failure: None,
+            domain_error: None,
+        };
+        let ctx_ptr = &mut ctx as *mut Context as *mut c_void;
+        let f = x.duplicate()?;
+        chk!(SNESSetFunction(
+            self.raw,
+            f.raw,
+            Some(residual_trampoline),
+            ctx_ptr
+        ))?;
+        chk!(SNESSetJacobian(
+            self.raw,
+            jac.raw,
+            jac.raw,
+            Some(jacobian_trampoline),
+            ctx_ptr
+        ))?;
+        let n = super::to_petsc_int(self.history.len())?;
+        chk!(SNESSetConvergenceHistory(
+            self.raw,
+            self.history.as_mut_ptr(),
+            std::ptr::null_mut(),
+            n,
+            p::PetscBool::PETSC_TRUE
+        ))?;
+        let solved = chk!(SNESSolve(self.raw, std::ptr::null_mut(), x.raw));
+        // Detach the context: it lives on this stack frame only.
+        chk!(SNESSetFunction(
+            self.raw,
+            f.raw,
+            Some(residual_trampoline),
+            std::ptr::null_mut()
+        ))?;
+        chk!(SNESSetJacobian(
+            self.raw,
+            jac.raw,
+            jac.raw,
+            Some(jacobian_trampoline),
+            std::ptr::null_mut()
+        ))?;
+        match ctx.failure.take() {
+            Some(Failure::Panic(payload)) => std::panic::resume_unwind(payload),
+            Some(Failure::Error(e)) => return Err(e),
+            None => solved?,
+        }
+        self.outcome(ctx.domain_error)
+    }
+
+    fn outcome(&self, domain_error: Option<String>) -> Result<SnesOutcome> {
+        let mut reason = p::SNESConvergedReason(0);
+        chk!(SNESGetConvergedReason(self.raw, &mut reason))?;
+        let mut its: PetscInt = 0;
+        chk!(SNESGetIterationNumber(self.raw, &mut its))?;
+        let mut lits: PetscInt = 0;
+        chk!(SNESGetLinearSolveIterations(self.raw, &mut lits))?;
+        let mut hist: *mut f64 = std::ptr::null_mut();
+        let mut nhist: PetscInt = 0;
+        chk!(SNESGetConvergenceHistory(
+            self.raw,
+            &mut hist,
+            std::ptr::null_mut(),
+            &mut nhist
+        ))?;
+        let n = (nhist.max(0) as usize).min(self.history.len());
+        Ok(SnesOutcome {
+            converged: reason.0 > 0,
+            reason: reason_name(reason.0),
+            iterations: its as usize,
+            linear_iterations: lits as usize,
+            residual_history: self.history[..n].to_vec(),
+            domain_error,
+        })
+    }
+}
+
+impl Drop for Snes {
+    fn drop(&mut self) {
+        // SAFETY: `raw` is a valid SNES owned by this struct.
+        let code = unsafe { p::SNESDestroy(&mut self.raw) };
+        if code != 0 {
+            eprintln!("warning: SNESDestroy returned error code {code}");
+        }
+    }
+}
+
+/// Runs a callback body with panics caught; maps the outcome to a PETSc error code.
+///
+/// # Safety
+/// `ctx` must be null or the `Context` set by `Snes::solve`, alive for this call.
+unsafe fn run_callback(
+    ctx: *mut c_void,
+    on_domain: impl FnOnce(),
+    body: impl FnOnce(&mut Context) -> Result<(), CallbackError>,
+) -> p::PetscErrorCode {
+    if ctx.is_null() {
+        return p::PETSC_ERR_USER;
+    }
+    let ctx = &mut *(ctx as *mut Context);
+    if ctx.failure.is_some() {
+        return p::PETSC_ERR_USER;
+    }
+    match catch_unwind(AssertUnwindSafe(|| body(ctx))) {
+        Ok(Ok(())) => 0,
+        Ok(Err(CallbackError::Domain(msg))) => {
+            ctx.domain_error = Some(msg);
+            on_domain();
+            0
+        }
+        Ok(Err(CallbackError::Fatal(e))) => {
+            ctx.failure = Some(Failure::Error(e));
+            p::PETSC_ERR_USER
+        }
+        Err(payload) => {
+            ctx.failure = Some(Failure::Panic(payload));
+            p::PETSC_ERR_USER
+        }
+    }
+}
+
+unsafe extern "C" fn residual_trampoline(
+    snes: p::SNES,
+    x: p::Vec,
+    f: p::Vec,
+    ctx: *mut c_void,
+) -> p::PetscErrorCode {
+    run_callback(
+        ctx,
+        || {
+            p::SNESSetFunctionDomainError(snes);
+        },
+        |c| {
+            let xv = Vector::from_borrowed(x)?;
+            let mut fv = Vector::from_borrowed(f)?;
+            (c.residual)(&xv, &mut fv)
+        },
+    )
+}
+
+unsafe extern "C" fn jacobian_trampoline(
+    snes: p::SNES,
+    x: p::Vec,
+    _a: p::Mat,
+    pmat: p::Mat,
+    ctx: *mut c_void,
+) -> p::PetscErrorCode {
+    run_callback(
+        ctx,
+        || {
+            p::SNESSetJacobianDomainError(snes);
+        },
+        |c| {
+            let xv = Vector::from_borrowed(x)?;
+            let mut jm = Matrix::from_borrowed(pmat)?;
+            (c.jacobian)(&xv, &mut jm)
+        },
+    )
+}
+
+/// PETSc's name of a converged reason.
+fn reason_name(r: i32) -> &'static str {
+    match r {
+        2 => "CONVERGED_FNORM_ABS",
+        3 => "CONVERGED_FNORM_RELATIVE",
+        4 => "CONVERGED_SNORM_RELATIVE",
+        5 => "CONVERGED_ITS",
+        0 => "CONVERGED_ITERATING",
+        -1 => "DIVERGED_FUNCTION_DOMAIN",
+        -2 => "DIVERGED_FUNCTION_COUNT",
+        -3 => "DIVERGED_LINEAR_SOLVE",
+        -4 => "DIVERGED_FNORM_NAN",
+        -5 => "DIVERGED_MAX_IT",
+        -6 => "DIVERGED_LINE_SEARCH",
+        -7 => "DIVERGED_INNER",
+        -8 => "DIVERGED_LOCAL_MIN",
+        -9 => "DIVERGED_DTOL",
+        -10 => "DIVERGED_JACOBIAN_DOMAIN",
+        -11 => "DIVERGED_TR_DELTA",
+        _ => "UNKNOWN_REASON",
+    }
+}

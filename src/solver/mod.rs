@@ -1,0 +1,336 @@
+//! Load stepping with Newton (PETSc SNES), step cutting, and per-step output.
+//!
+//! The load factor t goes from 0 to 1 in `steps.count` equal increments. Each increment is one
+//! SNES solve of `F(u; t) = 0` from the previous converged state. A solve that does not converge
+//! (diverged Newton, line-search failure, an inverted element reported as a domain error, NaN) is
+//! **cut**: the state is restored and the increment halved, at most `steps.max_cuts` times in a
+//! row; after a converged cut increment the step size doubles back toward the nominal one. Every
+//! cut is reported on rank 0 and counted in the history and summary.
+//!
+//! After each converged step: reactions on the constrained sets (summed over ranks), one VTU
+//! file per rank, the PVTU and PVD written by rank 0 once all pieces exist, and a history row.
+//! `summary.json` is rewritten after every step, so a killed run leaves a valid summary of what
+//! finished (with `"converged": false`).
+
+pub mod bulk;
+mod results;
+
+use std::cell::RefCell;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use mpi::collective::{CommunicatorCollectives, Root, SystemOperation};
+use mpi::topology::Communicator;
+
+use crate::case::Scene;
+use crate::dofs::DofMap;
+use crate::error::{Error, Result};
+use crate::io::output::{StepRecord, Summary};
+use crate::petsc::log::Phases;
+use crate::petsc::snes::Tolerances;
+use crate::petsc::{CallbackError, Matrix, Petsc, Scatter, Snes, Vector};
+use bulk::{Bulk, Inverted};
+use results::Results;
+
+/// How a run is carried out.
+#[derive(Clone, Debug)]
+pub struct RunOptions {
+    /// Folder for every result file.
+    pub out_dir: PathBuf,
+    /// No progress lines on rank 0.
+    pub quiet: bool,
+}
+
+/// Mutable state shared by the residual and Jacobian closures.
+struct EvalState {
+    scatter: Scatter,
+    /// Displacement of every dof this rank touches (`3 * node + c`); others stay zero.
+    u: Vec<f64>,
+    t: f64,
+    assembly_seconds: f64,
+}
+
+impl EvalState {
+    /// Fills `u` from the Newton iterate (free dofs) and the load curves (constrained dofs).
+    fn load(&mut self, scene: &Scene, dofs: &DofMap, x: &Vector) -> Result<()> {
+        let vals = self.scatter.gather(x)?;
+        for (&d, v) in dofs.gathered_dofs.iter().zip(vals) {
+            self.u[d] = v;
+        }
+        for c in &scene.constraints {
+            self.u[c.dof] = c.value * scene.curves[c.curve].eval(self.t);
+        }
+        Ok(())
+    }
+}
+
+/// Runs a scene; returns the summary (also written to `summary.json`).
+pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
+    let world = petsc.world();
+    let (rank, ranks) = (petsc.rank(), petsc.size());
+    let say = |msg: String| {
+        if rank == 0 && !opts.quiet {
+            println!("{msg}");
+        }
+    };
+    let mut phases = Phases::new(&["setup", "assembly", "solve", "output"])?;
+    let t_setup = Instant::now();
+    let setup_guard = phases.push("setup")?;
+
+    let element_rank = partition(scene, &world, ranks)?;
+    let dofs = DofMap::new(
+        &scene.mesh,
+        element_rank,
+        rank,
+        ranks,
+        &scene.constrained_mask(),
+    );
+    let bulk = Bulk::new(scene, &dofs)?;
+    let sparsity = dofs.bulk_sparsity(&scene.mesh);
+    let mut jac = Matrix::new_aij(&sparsity)?;
+    let mut x = Vector::new_mpi(dofs.owned_count)?;
+    x.set_all(0.0)?;
+    let scatter = Scatter::new(&x, &dofs.gathered_global)?;
+    let state = RefCell::new(EvalState {
+        scatter,
+        u: vec![0.0; 3 * scene.mesh.num_nodes()],
+        t: 1.0,
+        assembly_seconds: 0.0,
+    });
+    let force_scale = residual_scale(scene, &dofs, &bulk, &state, &x, &world)?;
+    let mut snes = Snes::new(Tolerances {
+        atol: scene.newton.atol * force_scale,
+        rtol: scene.newton.rtol,
+        stol: 1e-14,
+        max_it: scene.newton.max_it,
+    })?;
+    let mut results = Results::new(scene, &dofs, &opts.out_dir, rank, ranks)?;
+    drop(setup_guard);
+    phases.add("setup", t_setup.elapsed().as_secs_f64());
+    say(format!(
+        "mortar: {} on {ranks} rank(s): {} nodes, {} elements, {} free dofs, {} steps",
+        scene.name,
+        scene.mesh.num_nodes(),
+        scene.mesh.num_elements(),
+        dofs.total_free,
+        scene.steps
+    ));
+
+    let mut summary = Summary {
+        case: scene.name.clone(),
+        ranks,
+        converged: false,
+        ..Default::default()
+    };
+    let dt_nominal = 1.0 / scene.steps as f64;
+    let (mut t, mut dt, mut cuts_in_row, mut step) = (0.0f64, dt_nominal, 0usize, 0usize);
+    let mut x_prev = x.duplicate()?;
+    while t < 1.0 - 1e-12 {
+        let t_new = if t + dt > 1.0 - 1e-9 { 1.0 } else { t + dt };
+        x.copy_to(&mut x_prev)?;
+        state.borrow_mut().t = t_new;
+        state.borrow_mut().assembly_seconds = 0.0;
+        let t_solve = Instant::now();
+        let outcome = {
+            let mut residual = |xv: &Vector, f: &mut Vector| -> Result<(), CallbackError> {
+                let mut s = state.borrow_mut();
+                let t0 = Instant::now();
+                s.load(scene, &dofs, xv)?;
+                let inv = bulk.residual(scene, &dofs, &s.u, s.t, f)?;
+                s.assembly_seconds += t0.elapsed().as_secs_f64();
+                collective_domain_check(&world, inv)
+            };
+            let mut jacobian = |xv: &Vector, j: &mut Matrix| -> Result<(), CallbackError> {
+                let mut s = state.borrow_mut();
+                let t0 = Instant::now();
+                s.load(scene, &dofs, xv)?;
+                let inv = bulk.jacobian(scene, &dofs, &s.u, s.t, j)?;
+                s.assembly_seconds += t0.elapsed().as_secs_f64();
+                collective_domain_check(&world, inv)
+            };
+            snes.solve(&mut x, &mut jac, &mut residual, &mut jacobian)?
+        };
+        let assembly = state.borrow().assembly_seconds;
+        let solve_seconds = t_solve.elapsed().as_secs_f64();
+        phases.add("assembly", assembly);
+        phases.add("solve", (solve_seconds - assembly).max(0.0));
+        if !outcome.converged {
+            cuts_in_row += 1;
+            let why = outcome
+                .domain_error
+                .clone()
+                .unwrap_or_else(|| outcome.reason.to_string());
+            say(format!(
+                "  step {} load {t_new:.6}: not converged ({why}) after {} Newton its; cut {cuts_in_row}/{}",
+                step + 1,
+                outcome.iterations,
+                scene.max_cuts
+            ));
+            x_prev.copy_to(&mut x)?;
+            if cuts_in_row > scene.max_cuts {
+                summary.message = Some(format!(
+                    "step {} (load {t_new}) did not converge after {} cuts: {why}",
+                    step + 1,
+                    scene.max_cuts
+                ));
+                break;
+            }
+            dt *= 0.5;
+            continue;
+        }
+        step += 1;
+        t = t_new;
+        let t_out = Instant::now();
+        state.borrow_mut().load(scene, &dofs, &x)?;
+        let s = state.borrow();
+        let reactions = results.reactions(scene, &dofs, &bulk, &s.u, t, &world)?;
+        let write_vtu = scene.vtu_every > 0 && (step % scene.vtu_every == 0 || t >= 1.0);
+        if write_vtu {
+            results.write_step(scene, &dofs, &bulk, &s.u, step, t, &world)?;
+        }
+        drop(s);
+        let final_res = outcome.residual_history.last().copied().unwrap_or(0.0);
+        results.push_history(
+            step,
+            t,
+            &outcome,
+            cuts_in_row,
+            final_res,
+            &reactions,
+            [
+                assembly,
+                (solve_seconds - assembly).max(0.0),
+                t_out.elapsed().as_secs_f64(),
+            ],
+        )?;
+        summary.steps.push(StepRecord {
+            step,
+            load: t,
+            newton_its: outcome.iterations,
+            cut: cuts_in_row,
+            converged: true,
+        });
+        phases.add("output", t_out.elapsed().as_secs_f64());
+        say(format!(
+            "  step {step} load {t:.6}: {} Newton its, |F| {final_res:.3e}, {} linear its{}, {:.2} s",
+            outcome.iterations,
+            outcome.linear_iterations,
+            if cuts_in_row > 0 { format!(", after {cuts_in_row} cut(s)") } else { String::new() },
+            solve_seconds
+        ));
+        if rank == 0 {
+            summary.timings = phases
+                .seconds()
+                .iter()
+                .map(|(k, v)| (k.to_string(), *v))
+                .collect();
+            results.write_summary(&summary)?;
+        }
+        cuts_in_row = 0;
+        dt = (2.0 * dt).min(dt_nominal);
+    }
+    summary.converged = t >= 1.0 - 1e-12;
+    let s = state.borrow();
+    results.write_displacements(scene, &dofs, &s.u, &world)?;
+    for (k, v) in results.metrics(scene, &dofs, &bulk, &s.u, &world)? {
+        summary.metrics.insert(k, v);
+    }
+    let newton: Vec<usize> = summary.steps.iter().map(|s| s.newton_its).collect();
+    summary.metrics.insert(
+        "max_newton_its".into(),
+        newton.iter().copied().max().unwrap_or(0) as f64,
+    );
+    summary.metrics.insert(
+        "total_newton_its".into(),
+        newton.iter().sum::<usize>() as f64,
+    );
+    summary
+        .metrics
+        .insert("free_dofs".into(), dofs.total_free as f64);
+    summary.timings = phases
+        .seconds()
+        .iter()
+        .map(|(k, v)| (k.to_string(), *v))
+        .collect();
+    if rank == 0 {
+        results.write_summary(&summary)?;
+    }
+    say(format!(
+        "mortar: {} -> {}",
+        if summary.converged {
+            "converged"
+        } else {
+            "FAILED"
+        },
+        opts.out_dir.display()
+    ));
+    match &summary.message {
+        Some(m) if !summary.converged => Err(Error::Solve(m.clone())),
+        _ => Ok(summary),
+    }
+}
+
+/// Rank 0 partitions the elements with METIS; every rank receives the same partition.
+fn partition(
+    scene: &Scene,
+    world: &mpi::topology::SimpleCommunicator,
+    ranks: usize,
+) -> Result<Vec<usize>> {
+    let n = scene.mesh.num_elements();
+    let mut parts = vec![0u64; n];
+    if ranks > 1 {
+        if world.rank() == 0 {
+            let p = crate::mesh::partition::partition_elements(&scene.mesh, ranks)?;
+            parts.iter_mut().zip(p).for_each(|(a, b)| *a = b as u64);
+        }
+        world.process_at_rank(0).broadcast_into(&mut parts[..]);
+    }
+    Ok(parts.into_iter().map(|p| p as usize).collect())
+}
+
+/// Turns a local inverted-element finding into the same domain error on every rank.
+fn collective_domain_check(
+    world: &mpi::topology::SimpleCommunicator,
+    inv: Option<Inverted>,
+) -> Result<(), CallbackError> {
+    let local: i64 = inv.as_ref().map_or(0, |i| i.element as i64 + 1);
+    let mut global: i64 = 0;
+    world.all_reduce_into(&local, &mut global, SystemOperation::max());
+    if global == 0 {
+        return Ok(());
+    }
+    let detail = match &inv {
+        Some(i) if i.element as i64 + 1 == global => format!("det F = {:.3e}", i.det),
+        _ => "on another rank".to_string(),
+    };
+    Err(CallbackError::Domain(format!(
+        "element {} inverted ({detail})",
+        global - 1
+    )))
+}
+
+/// The norm of the residual at u = 0 under the full load: the force scale of the absolute
+/// Newton tolerance (1 if the scene is unloaded).
+fn residual_scale(
+    scene: &Scene,
+    dofs: &DofMap,
+    bulk: &Bulk,
+    state: &RefCell<EvalState>,
+    x: &Vector,
+    world: &mpi::topology::SimpleCommunicator,
+) -> Result<f64> {
+    let mut f = x.duplicate()?;
+    let mut s = state.borrow_mut();
+    s.t = 1.0;
+    s.load(scene, dofs, x)?;
+    let inv = bulk.residual(scene, dofs, &s.u, 1.0, &mut f)?;
+    let mut any: i64 = 0;
+    world.all_reduce_into(&(inv.is_some() as i64), &mut any, SystemOperation::max());
+    let norm = if any > 0 { 0.0 } else { f.norm2()? };
+    s.u.iter_mut().for_each(|v| *v = 0.0);
+    Ok(if norm.is_finite() && norm > 0.0 {
+        norm
+    } else {
+        1.0
+    })
+}

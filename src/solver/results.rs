@@ -1,0 +1,283 @@
+//! What a run leaves on disk, step by step.
+//!
+//! Layout of the output folder:
+//!
+//! - `vtu/<case>_<step>_r<rank>.vtu`: one piece per rank (its own elements): reference
+//!   coordinates, point field `displacement`, cell fields `cauchy_stress` (9 components,
+//!   volume-averaged), `von_mises`, `rank`. In ParaView: open the PVD, then Warp By Vector.
+//! - `<case>_<step>.pvtu`: joins the pieces of a step; `<case>.pvd`: the time series (time = load
+//!   factor), rewritten after each step.
+//! - `history.csv`: one row per converged step (see [`Results::push_history`]).
+//! - `displacement.csv`: every node's reference position and displacement at the last converged
+//!   step (`node,x,y,z,ux,uy,uz`).
+//! - `summary.json`: see `io::output::Summary`.
+//!
+//! Every file is written atomically (temporary file, then rename).
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use mpi::collective::{CommunicatorCollectives, SystemOperation};
+
+use super::bulk::{gather_nodes, Bulk};
+use crate::case::Scene;
+use crate::dofs::DofMap;
+use crate::error::{Error, Result};
+use crate::io::output::{write_pvd, write_pvtu, write_vtu, Field, History, Piece, Summary};
+use crate::petsc::SnesOutcome;
+use crate::solid::element_stress;
+
+/// Per-run output state.
+pub struct Results {
+    dir: PathBuf,
+    case: String,
+    rank: usize,
+    ranks: usize,
+    history: Option<History>,
+    pvd: Vec<(f64, String)>,
+    reaction_sets: Vec<(String, Vec<usize>)>,
+}
+
+const POINT_FIELDS: [(&str, usize); 1] = [("displacement", 3)];
+const CELL_FIELDS: [(&str, usize); 3] = [("cauchy_stress", 9), ("von_mises", 1), ("rank", 1)];
+
+impl Results {
+    /// Creates the output folders (rank 0) and the history columns.
+    pub fn new(
+        scene: &Scene,
+        _dofs: &DofMap,
+        dir: &Path,
+        rank: usize,
+        ranks: usize,
+    ) -> Result<Results> {
+        std::fs::create_dir_all(dir.join("vtu")).map_err(|e| Error::io(dir, e))?;
+        let reaction_sets: Vec<(String, Vec<usize>)> = scene
+            .reaction_sets
+            .iter()
+            .map(|(k, v)| (k.clone(), v.clone()))
+            .collect();
+        let history = (rank == 0).then(|| {
+            let mut cols: Vec<String> = [
+                "step",
+                "load",
+                "newton_its",
+                "cuts",
+                "linear_its",
+                "residual",
+            ]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+            for (name, _) in &reaction_sets {
+                for c in ["x", "y", "z"] {
+                    cols.push(format!("reaction_{name}_{c}"));
+                }
+            }
+            cols.extend(["seconds_assembly", "seconds_solve", "seconds_output"].map(String::from));
+            History::new(dir.join("history.csv"), cols)
+        });
+        Ok(Results {
+            dir: dir.to_path_buf(),
+            case: scene.name.clone(),
+            rank,
+            ranks,
+            history,
+            pvd: Vec::new(),
+            reaction_sets,
+        })
+    }
+
+    /// Reaction force on each reaction set: the sum of `f_int - f_ext` over its constrained
+    /// dofs, over all ranks. Returned in `reaction_sets` order, as `[x, y, z]`.
+    pub fn reactions(
+        &self,
+        scene: &Scene,
+        _dofs: &DofMap,
+        bulk: &Bulk,
+        u: &[f64],
+        t: f64,
+        world: &mpi::topology::SimpleCommunicator,
+    ) -> Result<Vec<[f64; 3]>> {
+        let mut nodal = vec![0.0; u.len()];
+        bulk.nodal_forces(scene, u, t, &mut nodal);
+        let mut local = Vec::with_capacity(3 * self.reaction_sets.len());
+        for (_, dofs) in &self.reaction_sets {
+            let mut r = [0.0; 3];
+            for &d in dofs {
+                r[d % 3] += nodal[d];
+            }
+            local.extend_from_slice(&r);
+        }
+        let mut global = vec![0.0; local.len()];
+        world.all_reduce_into(&local[..], &mut global[..], SystemOperation::sum());
+        Ok(global.chunks(3).map(|c| [c[0], c[1], c[2]]).collect())
+    }
+
+    /// Writes this rank's VTU piece; after a barrier, rank 0 writes the PVTU and the PVD.
+    #[allow(clippy::too_many_arguments)]
+    pub fn write_step(
+        &mut self,
+        scene: &Scene,
+        dofs: &DofMap,
+        bulk: &Bulk,
+        u: &[f64],
+        step: usize,
+        t: f64,
+        world: &mpi::topology::SimpleCommunicator,
+    ) -> Result<()> {
+        let mesh = &scene.mesh;
+        let mut local_index = BTreeMap::new();
+        for (i, &n) in dofs.local_nodes.iter().enumerate() {
+            local_index.insert(n, i);
+        }
+        let points: Vec<[f64; 3]> = dofs.local_nodes.iter().map(|&n| mesh.coords[n]).collect();
+        let disp: Vec<f64> = dofs
+            .local_nodes
+            .iter()
+            .flat_map(|&n| [u[3 * n], u[3 * n + 1], u[3 * n + 2]])
+            .collect();
+        let (mut types, mut conn, mut offsets) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut stress, mut mises, mut rank_field) = (Vec::new(), Vec::new(), Vec::new());
+        let mut ue = Vec::new();
+        for (e, geom) in bulk.elements() {
+            types.push(mesh.types[*e].vtk_cell_type());
+            conn.extend(mesh.element_nodes(*e).iter().map(|n| local_index[n]));
+            offsets.push(conn.len());
+            gather_nodes(u, mesh.element_nodes(*e), &mut ue);
+            let (s, vm) = element_stress(geom, &scene.materials[mesh.body[*e]], &ue);
+            stress.extend(s.transpose().iter().copied());
+            mises.push(vm);
+            rank_field.push(self.rank as f64);
+        }
+        let piece = Piece {
+            points: &points,
+            cell_types: &types,
+            connectivity: &conn,
+            offsets: &offsets,
+            point_data: vec![Field {
+                name: "displacement",
+                components: 3,
+                values: &disp,
+            }],
+            cell_data: vec![
+                Field {
+                    name: "cauchy_stress",
+                    components: 9,
+                    values: &stress,
+                },
+                Field {
+                    name: "von_mises",
+                    components: 1,
+                    values: &mises,
+                },
+                Field {
+                    name: "rank",
+                    components: 1,
+                    values: &rank_field,
+                },
+            ],
+        };
+        let piece_name = |r: usize| format!("vtu/{}_{step:04}_r{r}.vtu", self.case);
+        write_vtu(&self.dir.join(piece_name(self.rank)), &piece)?;
+        world.barrier();
+        if self.rank == 0 {
+            let pvtu = format!("{}_{step:04}.pvtu", self.case);
+            let pieces: Vec<String> = (0..self.ranks).map(piece_name).collect();
+            write_pvtu(&self.dir.join(&pvtu), &pieces, &POINT_FIELDS, &CELL_FIELDS)?;
+            self.pvd.push((t, pvtu));
+            write_pvd(&self.dir.join(format!("{}.pvd", self.case)), &self.pvd)?;
+        }
+        Ok(())
+    }
+
+    /// Appends a history row (rank 0): step, load, newton_its, cuts, linear_its, residual,
+    /// reaction components per set, and the seconds of assembly, solve and output of the step.
+    #[allow(clippy::too_many_arguments)]
+    pub fn push_history(
+        &mut self,
+        step: usize,
+        t: f64,
+        outcome: &SnesOutcome,
+        cuts: usize,
+        residual: f64,
+        reactions: &[[f64; 3]],
+        seconds: [f64; 3],
+    ) -> Result<()> {
+        let Some(h) = self.history.as_mut() else {
+            return Ok(());
+        };
+        let mut row = vec![
+            step as f64,
+            t,
+            outcome.iterations as f64,
+            cuts as f64,
+            outcome.linear_iterations as f64,
+            residual,
+        ];
+        row.extend(reactions.iter().flatten());
+        row.extend(seconds);
+        h.push_row(row)
+    }
+
+    /// Writes summary.json (rank 0 only).
+    pub fn write_summary(&self, summary: &Summary) -> Result<()> {
+        if self.rank == 0 {
+            summary.write(&self.dir.join("summary.json"))?;
+        }
+        Ok(())
+    }
+
+    /// Writes `displacement.csv` (rank 0): `node,x,y,z,ux,uy,uz` for every node, reference
+    /// coordinates and displacements of the last converged step, gathered from the owners.
+    pub fn write_displacements(
+        &self,
+        scene: &Scene,
+        dofs: &DofMap,
+        u: &[f64],
+        world: &mpi::topology::SimpleCommunicator,
+    ) -> Result<()> {
+        let mut mine = vec![0.0; u.len()];
+        for &n in dofs.local_nodes.iter().filter(|&&n| dofs.node_owner[n] == self.rank) {
+            mine[3 * n..3 * n + 3].copy_from_slice(&u[3 * n..3 * n + 3]);
+        }
+        let mut all = vec![0.0; u.len()];
+        world.all_reduce_into(&mine[..], &mut all[..], SystemOperation::sum());
+        if self.rank != 0 {
+            return Ok(());
+        }
+        let mut csv = String::from("node,x,y,z,ux,uy,uz\n");
+        for (n, x) in scene.mesh.coords.iter().enumerate() {
+            let d = &all[3 * n..3 * n + 3];
+            csv.push_str(&format!(
+                "{n},{},{},{},{},{},{}\n",
+                x[0], x[1], x[2], d[0], d[1], d[2]
+            ));
+        }
+        crate::io::output::write_atomic(&self.dir.join("displacement.csv"), csv.as_bytes())
+    }
+
+    /// The scene's verification metrics, reduced over ranks.
+    pub fn metrics(
+        &self,
+        scene: &Scene,
+        dofs: &DofMap,
+        bulk: &Bulk,
+        u: &[f64],
+        world: &mpi::topology::SimpleCommunicator,
+    ) -> Result<Vec<(String, f64)>> {
+        let local = crate::verify::local_figures(scene, bulk.elements(), &dofs.local_nodes, u);
+        let reduce = |pairs: &[(&'static str, f64)], op: SystemOperation| {
+            let vals: Vec<f64> = pairs.iter().map(|p| p.1).collect();
+            let mut out = vec![0.0; vals.len()];
+            world.all_reduce_into(&vals[..], &mut out[..], op);
+            pairs
+                .iter()
+                .map(|p| p.0)
+                .zip(out)
+                .collect::<BTreeMap<_, _>>()
+        };
+        let sums = reduce(&local.sums, SystemOperation::sum());
+        let maxima = reduce(&local.maxima, SystemOperation::max());
+        Ok(crate::verify::metrics(&sums, &maxima))
+    }
+}
