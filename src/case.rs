@@ -607,15 +607,84 @@ fn prefix_sets(mesh: &mut Mesh, body: &str) {
     rename(&mut mesh.element_sets);
 }
 
-/// Moves every node that lies in no node set (the interior of a generated part) by a
-/// deterministic pseudo-random vector of length up to `amount` times the smallest element edge.
+/// Distorts a generated part: every corner (vertex) node that lies in no node set (the interior)
+/// moves by a deterministic pseudo-random vector of length up to `amount` times the shortest
+/// element edge; every other interior node (mid-edge, face and centre nodes of quadratic
+/// elements) moves by the motion of its element's corners interpolated at its parametric
+/// position, plus a quarter of that random amount. Moving higher-order nodes with their corners
+/// keeps elements valid and neighbours consistent (an edge node follows only its edge's corners).
 fn distort_interior(mesh: &mut Mesh, amount: f64) {
-    let mut on_set = vec![false; mesh.num_nodes()];
+    let n = mesh.num_nodes();
+    let mut on_set = vec![false; n];
     for nodes in mesh.node_sets.values() {
         for &v in nodes {
             on_set[v] = true;
         }
     }
+    let h = shortest_edge(mesh);
+    let mut rng = XorShift(0x9E37_79B9_7F4A_7C15);
+    let noise: Vec<[f64; 3]> = (0..n)
+        .map(|_| {
+            let d = [rng.next(), rng.next(), rng.next()];
+            d.map(|c| amount * h * c / 3f64.sqrt())
+        })
+        .collect();
+    // Vertex motion first.
+    let mut is_vertex = vec![false; n];
+    for e in 0..mesh.num_elements() {
+        let k = mesh.types[e].num_corners();
+        for &v in &mesh.element_nodes(e)[..k] {
+            is_vertex[v] = true;
+        }
+    }
+    let motion: Vec<[f64; 3]> = (0..n)
+        .map(|v| {
+            if is_vertex[v] && !on_set[v] {
+                noise[v]
+            } else {
+                [0.0; 3]
+            }
+        })
+        .collect();
+    // Higher-order nodes follow their corners.
+    let mut placed = vec![false; n];
+    let mut shift = motion.clone();
+    for e in 0..mesh.num_elements() {
+        let kind = mesh.types[e];
+        let linear = if kind.is_hex() {
+            ElementType::Hex8
+        } else {
+            ElementType::Tet4
+        };
+        let params = kind.node_coords();
+        let nodes = mesh.element_nodes(e).to_vec();
+        let corners = &nodes[..kind.num_corners()];
+        let mut nl = vec![0.0; linear.num_nodes()];
+        for (a, &v) in nodes.iter().enumerate().skip(kind.num_corners()) {
+            if on_set[v] || placed[v] {
+                continue;
+            }
+            placed[v] = true;
+            linear.shape(params[a], &mut nl);
+            for d in 0..3 {
+                let follow: f64 = corners
+                    .iter()
+                    .zip(&nl)
+                    .map(|(&c, w)| w * motion[c][d])
+                    .sum();
+                shift[v][d] = follow + 0.25 * noise[v][d];
+            }
+        }
+    }
+    for (x, d) in mesh.coords.iter_mut().zip(&shift) {
+        for k in 0..3 {
+            x[k] += d[k];
+        }
+    }
+}
+
+/// The shortest corner-to-corner element edge.
+fn shortest_edge(mesh: &Mesh) -> f64 {
     let mut h = f64::INFINITY;
     for e in 0..mesh.num_elements() {
         let en = mesh.element_nodes(e);
@@ -625,20 +694,18 @@ fn distort_interior(mesh: &mut Mesh, amount: f64) {
             h = h.min(l);
         }
     }
-    let mut state: u64 = 0x9E37_79B9_7F4A_7C15;
-    let mut next = || {
-        // xorshift64*: reproducible on every rank and platform.
-        state ^= state >> 12;
-        state ^= state << 25;
-        state ^= state >> 27;
-        (state.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-    };
-    for (v, x) in mesh.coords.iter_mut().enumerate() {
-        let d = [next(), next(), next()];
-        if !on_set[v] {
-            for k in 0..3 {
-                x[k] += amount * h * d[k] / 3f64.sqrt();
-            }
-        }
+    h
+}
+
+/// xorshift64*: the same sequence on every rank and platform.
+struct XorShift(u64);
+
+impl XorShift {
+    /// A number in [-1, 1).
+    fn next(&mut self) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
     }
 }

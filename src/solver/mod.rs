@@ -160,14 +160,19 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                 .domain_error
                 .clone()
                 .unwrap_or_else(|| outcome.reason.to_string());
+            x_prev.copy_to(&mut x)?;
+            let giving_up = cuts_in_row > scene.max_cuts;
             say(format!(
-                "  step {} load {t_new:.6}: not converged ({why}) after {} Newton its; cut {cuts_in_row}/{}",
+                "  step {} load {t_new:.6}: not converged ({why}) after {} Newton its; {}",
                 step + 1,
                 outcome.iterations,
-                scene.max_cuts
+                if giving_up {
+                    format!("no cuts left ({} allowed)", scene.max_cuts)
+                } else {
+                    format!("cut {cuts_in_row}/{}", scene.max_cuts)
+                }
             ));
-            x_prev.copy_to(&mut x)?;
-            if cuts_in_row > scene.max_cuts {
+            if giving_up {
                 summary.message = Some(format!(
                     "step {} (load {t_new}) did not converge after {} cuts: {why}",
                     step + 1,

@@ -237,7 +237,11 @@ impl Results {
         world: &mpi::topology::SimpleCommunicator,
     ) -> Result<()> {
         let mut mine = vec![0.0; u.len()];
-        for &n in dofs.local_nodes.iter().filter(|&&n| dofs.node_owner[n] == self.rank) {
+        for &n in dofs
+            .local_nodes
+            .iter()
+            .filter(|&&n| dofs.node_owner[n] == self.rank)
+        {
             mine[3 * n..3 * n + 3].copy_from_slice(&u[3 * n..3 * n + 3]);
         }
         let mut all = vec![0.0; u.len()];

@@ -1,0 +1,710 @@
+//! Bad input ends in one clear line on stderr: never a panic, an abort, a hang or NaN output.
+//!
+//! Every row of [`rows`] is a small scene that is wrong in one way: a case file, an extra file
+//! (a `.msh`, a PETSc options file) and the command line. Each row is written into its own fresh
+//! folder under `CARGO_TARGET_TMPDIR` and the `mortar` binary is run there directly (one MPI
+//! rank, no mpirun), with `RUST_BACKTRACE` unset. For every row the test checks that:
+//!
+//! - the process ends within [`TIMEOUT`] (else it is killed and the row fails);
+//! - it exits with a non-zero code (an exit by signal, e.g. an abort, fails the row);
+//! - stderr holds exactly one non-empty line, which starts with `mortar: error:` and contains
+//!   one of the row's culprits (the key, set, element, file or option at fault);
+//! - stderr contains neither `panicked` nor `RUST_BACKTRACE`;
+//! - no file in the output folder (`run` only) contains a NaN.
+//!
+//! All rows run, then one assertion lists every failing row with its stderr. Rows marked
+//! `known_bug` (each with a `FIXME(src)` comment saying what to fix) print a warning instead of
+//! failing, and a note when they start passing so the mark can be removed. Each row's folder
+//! keeps its inputs, `stdout.txt` and `stderr.txt` after the run.
+//!
+//! A control test runs the unedited [`VALID`] scene and expects success, so the rows are known
+//! to fail for the reason they were written for.
+
+use std::fmt::Write as _;
+use std::fs::File;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::thread::sleep;
+use std::time::{Duration, Instant};
+
+/// Longest a row may run before it counts as a hang.
+const TIMEOUT: Duration = Duration::from_secs(60);
+
+/// A tiny valid scene: one hex8 pulled along x. Rows edit it.
+const VALID: &str = r#"[[mesh]]
+body = "b"
+generator = "box"
+element = "hex8"
+divisions = [1, 1, 1]
+lo = [0.0, 0.0, 0.0]
+hi = [1.0, 1.0, 1.0]
+
+[[material]]
+body = "b"
+model = "linear_elastic"
+young = 1000.0
+poisson = 0.3
+
+[[dirichlet]]
+set = "b.xmin"
+components = ["x", "y", "z"]
+
+[[dirichlet]]
+set = "b.xmax"
+components = ["x"]
+value = [0.01]
+"#;
+
+/// The material block of [`VALID`] (`edit` checks that it occurs there).
+const MATERIAL: &str = r#"[[material]]
+body = "b"
+model = "linear_elastic"
+young = 1000.0
+poisson = 0.3
+"#;
+
+/// A scene read from `mesh.msh`.
+const GMSH: &str = r#"[[mesh]]
+generator = "gmsh"
+file = "mesh.msh"
+
+[[material]]
+model = "linear_elastic"
+young = 1000.0
+poisson = 0.3
+"#;
+
+/// A thick sphere octant with its radii swapped.
+const SPHERE_SWAPPED_RADII: &str = r#"[[mesh]]
+body = "s"
+generator = "thick_sphere_octant"
+element = "hex8"
+n_circ = 1
+n_rad = 1
+inner_radius = 2.0
+outer_radius = 1.0
+
+[[material]]
+model = "linear_elastic"
+young = 1000.0
+poisson = 0.3
+"#;
+
+/// The subcommand a row runs.
+#[derive(Clone, Copy, Debug)]
+enum Sub {
+    Run,
+    Check,
+}
+
+/// The content of an extra file written next to the case file.
+enum Content {
+    /// This text.
+    Text(&'static str),
+    /// A copy of this file under `tests/data/`.
+    Data(&'static str),
+}
+
+/// One bad input and what its error must name.
+struct Row {
+    /// Unique, also the name of the row's folder.
+    name: &'static str,
+    /// The case file's text, written as `case.toml`; `None` runs on a missing `no_such_case.toml`.
+    case: Option<String>,
+    /// Extra files: (name in the row's folder, content).
+    files: Vec<(&'static str, Content)>,
+    sub: Sub,
+    /// Arguments after the case file. `run` rows get `--out out` unless they pass `--out`.
+    args: Vec<&'static str>,
+    /// The error line must contain at least one of these.
+    culprit: Vec<&'static str>,
+    /// A known bug in src/: a failure prints a warning instead of failing the test.
+    known_bug: bool,
+}
+
+impl Row {
+    fn new(name: &'static str, sub: Sub, case: Option<String>, culprit: &'static str) -> Row {
+        Row {
+            name,
+            case,
+            files: Vec::new(),
+            sub,
+            args: Vec::new(),
+            culprit: vec![culprit],
+            known_bug: false,
+        }
+    }
+
+    fn file(mut self, name: &'static str, content: Content) -> Row {
+        self.files.push((name, content));
+        self
+    }
+
+    fn args(mut self, args: &[&'static str]) -> Row {
+        self.args.extend_from_slice(args);
+        self
+    }
+
+    /// Also accepts `other` as the culprit.
+    fn or(mut self, other: &'static str) -> Row {
+        self.culprit.push(other);
+        self
+    }
+
+    fn known_bug(mut self) -> Row {
+        self.known_bug = true;
+        self
+    }
+}
+
+fn check(name: &'static str, case: Option<String>, culprit: &'static str) -> Row {
+    Row::new(name, Sub::Check, case, culprit)
+}
+
+fn run(name: &'static str, case: Option<String>, culprit: &'static str) -> Row {
+    Row::new(name, Sub::Run, case, culprit)
+}
+
+/// `base` with its single occurrence of `old` replaced by `new`.
+fn edit(base: &str, old: &str, new: &str) -> String {
+    assert_eq!(
+        base.matches(old).count(),
+        1,
+        "'{old}' must occur once in:\n{base}"
+    );
+    base.replacen(old, new, 1)
+}
+
+/// [`VALID`] with one edit.
+fn valid_with(old: &str, new: &str) -> Option<String> {
+    text(&edit(VALID, old, new))
+}
+
+/// [`VALID`] with top-level keys in front (they must precede the tables).
+fn valid_top(keys: &str) -> Option<String> {
+    text(&format!("{keys}\n{VALID}"))
+}
+
+/// [`VALID`] with more tables after it (or more keys of its last table, `dirichlet[1]`).
+fn valid_plus(tables: &str) -> Option<String> {
+    text(&format!("{VALID}\n{tables}"))
+}
+
+/// A case file's text, as a row wants it.
+fn text(s: &str) -> Option<String> {
+    Some(s.to_string())
+}
+
+/// The table of bad inputs.
+fn rows() -> Vec<Row> {
+    use Content::{Data, Text};
+    vec![
+        // --- The case file as a whole.
+        check("missing_case_file", None, "no_such_case.toml"),
+        check("not_toml", text("this is [not toml\n"), "case.toml").or("TOML"),
+        check("empty_case_file", text(""), "mesh"),
+        check(
+            "unknown_top_level_key",
+            valid_top(r#"colour = "red""#),
+            "colour",
+        ),
+        check("no_mesh_parts", text("mesh = []\n"), "[[mesh]]"),
+        // --- [[mesh]].
+        check(
+            "unknown_mesh_key",
+            valid_with("divisions", "nodes_per_edge = 3\ndivisions"),
+            "nodes_per_edge",
+        ),
+        check(
+            "unknown_generator",
+            valid_with(r#""box""#, r#""cylinder""#),
+            "cylinder",
+        ),
+        check(
+            "unknown_element",
+            valid_with(r#""hex8""#, r#""hex9""#),
+            "hex9",
+        ),
+        check(
+            "divisions_with_zero",
+            valid_with("[1, 1, 1]", "[1, 0, 1]"),
+            "mesh[0].divisions",
+        ),
+        check(
+            "divisions_negative",
+            valid_with("[1, 1, 1]", "[1, -1, 1]"),
+            "divisions",
+        ),
+        check(
+            "box_hi_not_above_lo",
+            valid_with("hi = [1.0, 1.0, 1.0]", "hi = [1.0, 0.0, 1.0]"),
+            "mesh[0]: hi",
+        ),
+        // FIXME(src): src/case.rs, "box" branch of build_part (~line 530): a NaN corner passes
+        // the `hi[d] <= lo[d]` test and is only caught by Mesh::check as "mesh: node 0 has
+        // non-finite coordinates", which does not name the key. Fix: before that test, reject
+        // non-finite `lo`/`hi` entries (and `translate`, in build_mesh) with
+        // "mesh[{i}].lo = [...]: every entry must be finite".
+        check(
+            "box_lo_nan",
+            valid_with("lo = [0.0, 0.0, 0.0]", "lo = [nan, 0.0, 0.0]"),
+            "mesh[0].lo",
+        )
+        .known_bug(),
+        check(
+            "distort_too_large",
+            valid_with("divisions", "distort = 0.5\ndivisions"),
+            "distort",
+        ),
+        check(
+            "sphere_outer_not_above_inner",
+            text(SPHERE_SWAPPED_RADII),
+            "outer_radius",
+        ),
+        // --- Gmsh files.
+        run("missing_gmsh_file", text(GMSH), "mesh.msh"),
+        check("truncated_msh", text(GMSH), "mesh.msh")
+            .file("mesh.msh", Data("truncated.msh"))
+            .or("truncated"),
+        check("msh_version_22", text(GMSH), "version 2.2").file("mesh.msh", Data("version22.msh")),
+        check("msh_not_gmsh", text(GMSH), "not a Gmsh file")
+            .file("mesh.msh", Text("solid cube\nendsolid cube\n")),
+        check("msh_unsupported_element", text(GMSH), "element type 6")
+            .file("mesh.msh", Data("unsupported.msh")),
+        check("msh_surface_not_a_face", text(GMSH), "surface element 4")
+            .file("mesh.msh", Data("not_a_face.msh")),
+        check("msh_inverted_hex", text(GMSH), "Gmsh element 7")
+            .file("mesh.msh", Data("bad/inverted_hex.msh")),
+        // FIXME(src): src/io/gmsh.rs, Reader::parse (~line 216): mshio panics on a $Nodes header
+        // that counts 0 nodes (mshio nodes_section.rs:39, subtract with overflow);
+        // catch_unwind turns it into an error, but the default panic hook has already printed
+        // "thread 'main' panicked at ..." to stderr. Fix: install a silent hook around the
+        // catch_unwind (`let hook = std::panic::take_hook(); std::panic::set_hook(Box::new(
+        // |_| {}));` ... `std::panic::set_hook(hook);`), and/or reject a zero count first.
+        check("msh_zero_node_count", text(GMSH), "mesh.msh")
+            .file("mesh.msh", Data("bad/zero_node_count.msh"))
+            .known_bug(),
+        // FIXME(src): src/io/gmsh.rs:264, `HashMap::with_capacity(nodes.num_nodes as usize)`,
+        // trusts the $Nodes header count: 10^13 aborts the process (allocation failure,
+        // SIGABRT). Fix: size it by the nodes actually read,
+        // `nodes.node_blocks.iter().map(|b| b.nodes.len()).sum()`, and reject a header count
+        // that differs ("$Nodes header counts N nodes, the blocks hold M").
+        check("msh_huge_node_count", text(GMSH), "mesh.msh")
+            .file("mesh.msh", Data("bad/huge_node_count.msh"))
+            .known_bug(),
+        // --- [[material]].
+        check(
+            "young_wrong_type",
+            valid_with("young = 1000.0", r#"young = "abc""#),
+            "young",
+        ),
+        check(
+            "young_zero",
+            valid_with("young = 1000.0", "young = 0.0"),
+            "young = 0",
+        ),
+        check(
+            "young_negative",
+            valid_with("young = 1000.0", "young = -5.0"),
+            "young = -5",
+        ),
+        run(
+            "poisson_half",
+            valid_with("poisson = 0.3", "poisson = 0.5"),
+            "poisson = 0.5",
+        ),
+        check(
+            "poisson_minus_one",
+            valid_with("poisson = 0.3", "poisson = -1.0"),
+            "poisson = -1",
+        ),
+        check(
+            "poisson_nan",
+            valid_with("poisson = 0.3", "poisson = nan"),
+            "poisson = NaN",
+        ),
+        check(
+            "unknown_material_model",
+            valid_with(r#""linear_elastic""#, r#""mooney_rivlin""#),
+            "mooney_rivlin",
+        ),
+        check(
+            "unknown_material_key",
+            valid_with("young = 1000.0", "youngs = 1000.0"),
+            "youngs",
+        ),
+        check(
+            "material_for_missing_body",
+            valid_with(MATERIAL, &MATERIAL.replace(r#""b""#, r#""ghost""#)),
+            "ghost",
+        ),
+        check("missing_material", valid_with(MATERIAL, ""), "body 'b'"),
+        check(
+            "two_materials_for_one_body",
+            valid_plus(MATERIAL),
+            "material[1]",
+        ),
+        // --- Constraints and loads.
+        check(
+            "symmetry_missing_set",
+            valid_plus(
+                r#"[[symmetry]]
+set = "b.nowhere"
+normal = "x"
+"#,
+            ),
+            "b.nowhere",
+        ),
+        check(
+            "symmetry_bad_normal",
+            valid_plus(
+                r#"[[symmetry]]
+set = "b.ymin"
+normal = "w"
+"#,
+            ),
+            "symmetry[0].normal",
+        ),
+        check(
+            "pressure_missing_face_set",
+            valid_plus(
+                r#"[[pressure]]
+set = "b.lid"
+value = 1.0
+"#,
+            ),
+            "b.lid",
+        ),
+        check(
+            "dirichlet_component_w",
+            valid_with(r#"["x", "y", "z"]"#, r#"["x", "y", "w"]"#),
+            r#""w""#,
+        ),
+        check(
+            "dirichlet_value_count",
+            valid_with("value = [0.01]", "value = [0.01, 0.02]"),
+            "dirichlet[1].value",
+        ),
+        check(
+            "dirichlet_value_infinite",
+            valid_with("value = [0.01]", "value = [inf]"),
+            "dirichlet[1].value",
+        ),
+        check(
+            "dirichlet_value_and_gradient",
+            valid_plus("gradient = [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]\n"),
+            "dirichlet[1]",
+        ),
+        check(
+            "table_curve_decreasing_t",
+            valid_plus(
+                r#"[dirichlet.curve]
+kind = "table"
+table = [[0.0, 0.0], [0.5, 1.0], [0.25, 1.0]]
+"#,
+            ),
+            "dirichlet[1].curve.table",
+        ),
+        check(
+            "unknown_curve_kind",
+            valid_plus("[dirichlet.curve]\nkind = \"sine\"\n"),
+            "sine",
+        ),
+        check(
+            "body_force_missing_body",
+            valid_plus(
+                r#"[[body_force]]
+body = "ghost"
+value = [0.0, 0.0, -1.0]
+"#,
+            ),
+            "body_force[0].body",
+        ),
+        check(
+            "reactions_on_unconstrained_set",
+            valid_plus("[output]\nreactions = [\"b.ymax\"]\n"),
+            "b.ymax",
+        ),
+        // --- Steps, Newton, verification.
+        check(
+            "steps_count_zero",
+            valid_plus("[steps]\ncount = 0\n"),
+            "steps.count",
+        ),
+        check(
+            "newton_rtol_zero",
+            valid_plus("[newton]\nrtol = 0.0\n"),
+            "rtol",
+        ),
+        // FIXME(src): src/petsc/snes.rs:94 allocates `vec![0.0; tol.max_it + 2]` before anything
+        // checks max_it: 10^14 aborts the process (allocation failure, SIGABRT). Fix: bound it
+        // in src/case.rs next to the rtol/atol check ("newton.max_it = N: must be in
+        // 1..=10000"), and in Snes::new start `history` empty: it is resized anyway from the
+        // value PETSc settles on after SNESSetFromOptions.
+        run(
+            "newton_max_it_absurd",
+            valid_plus("[newton]\nmax_it = 100000000000000\n"),
+            "max_it",
+        )
+        .known_bug(),
+        check(
+            "verification_kind_unknown",
+            valid_plus("[verification]\nkind = \"hertz\"\n"),
+            "hertz",
+        ),
+        // --- PETSc options, on the command line and in a file.
+        check(
+            "missing_petsc_options_file",
+            valid_top(r#"petsc_options = "nowhere.rc""#),
+            "nowhere.rc",
+        ),
+        run("ksp_type_nonsense", text(VALID), "nonsense")
+            .or("KSP")
+            .args(&["-ksp_type", "nonsense"]),
+        run("pc_type_nonsense", text(VALID), "nonsense").args(&["-pc_type", "nonsense"]),
+        // FIXME(src): PETSc's message is only "Input string abc has no integer value", naming
+        // neither the option nor the options file. Fix: in src/petsc/snes.rs:112, add to an
+        // error of SNESSetFromOptions "while applying the PETSc options (command line and
+        // <options file>)"; to name the option, find the entry holding the bad value in the
+        // options database (PetscOptionsGetAll) and add "-snes_max_it abc".
+        run(
+            "petscrc_bad_integer",
+            valid_top(r#"petsc_options = "petscrc""#),
+            "petscrc",
+        )
+        .or("snes_max_it")
+        .file("petscrc", Text("-snes_max_it abc\n"))
+        .known_bug(),
+        // --- The command line.
+        // FIXME(src): src/main.rs, pull_our_options (~line 91): a trailing `--out` without a value
+        // is moved in front of the case file, so clap takes the case file as the folder and
+        // prints "the following required arguments were not provided: <CASE>" and the usage,
+        // not one "mortar: error:" line. Fix: when `--out` has no value return "mortar: error:
+        // --out needs a folder"; and in main() print clap's errors as one line,
+        // `mortar: error: <first line of e.render() without its "error: " prefix>`.
+        run("out_without_value", text(VALID), "--out")
+            .args(&["--out"])
+            .known_bug(),
+        run("out_is_a_file", text(VALID), "results")
+            .file("results", Text("not a folder\n"))
+            .args(&["--out", "results"]),
+    ]
+}
+
+/// What a finished row left behind.
+struct Outcome {
+    status: String,
+    code: Option<i32>,
+    stderr: String,
+    out_dir: Option<PathBuf>,
+}
+
+/// Writes the row's files into a fresh folder and runs `mortar` there with a timeout.
+fn execute(row: &Row) -> Result<Outcome, String> {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("bad_input")
+        .join(row.name);
+    if dir.exists() {
+        std::fs::remove_dir_all(&dir)
+            .map_err(|e| format!("cannot clear {}: {e}", dir.display()))?;
+    }
+    std::fs::create_dir_all(&dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    let case = match &row.case {
+        Some(text) => {
+            std::fs::write(dir.join("case.toml"), text).map_err(|e| e.to_string())?;
+            "case.toml"
+        }
+        None => "no_such_case.toml",
+    };
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    for (name, content) in &row.files {
+        let to = dir.join(name);
+        match content {
+            Content::Text(t) => std::fs::write(&to, t).map_err(|e| e.to_string())?,
+            Content::Data(from) => {
+                std::fs::copy(data.join(from), &to).map_err(|e| format!("{from}: {e}"))?;
+            }
+        }
+    }
+
+    // Paths are relative to the row's folder, so messages never contain the row's name.
+    let sub = match row.sub {
+        Sub::Run => "run",
+        Sub::Check => "check",
+    };
+    let mut args: Vec<&str> = vec![sub, case];
+    let mut out_dir = None;
+    if let Sub::Run = row.sub {
+        match row.args.iter().position(|a| *a == "--out") {
+            Some(i) => out_dir = row.args.get(i + 1).map(|d| dir.join(d)),
+            None => {
+                args.extend(["--out", "out"]);
+                out_dir = Some(dir.join("out"));
+            }
+        }
+    }
+    args.extend(&row.args);
+
+    let stderr_path = dir.join("stderr.txt");
+    let log = |p: &Path| File::create(p).map_err(|e| format!("{}: {e}", p.display()));
+    let mut child = Command::new(env!("CARGO_BIN_EXE_mortar"))
+        .args(&args)
+        .current_dir(&dir)
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .env("OMPI_MCA_mpi_yield_when_idle", "1")
+        .env_remove("RUST_BACKTRACE")
+        .stdin(Stdio::null())
+        .stdout(log(&dir.join("stdout.txt"))?)
+        .stderr(log(&stderr_path)?)
+        .spawn()
+        .map_err(|e| format!("cannot start mortar: {e}"))?;
+    let start = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().map_err(|e| e.to_string())? {
+            break s;
+        }
+        if start.elapsed() > TIMEOUT {
+            let _ = child.kill();
+            let _ = child.wait();
+            return Err(format!(
+                "hung: killed after {} s (mortar {})",
+                TIMEOUT.as_secs(),
+                args.join(" ")
+            ));
+        }
+        sleep(Duration::from_millis(20));
+    };
+    let stderr = std::fs::read(&stderr_path).map_err(|e| e.to_string())?;
+    Ok(Outcome {
+        status: status.to_string(),
+        code: status.code(),
+        stderr: String::from_utf8_lossy(&stderr).into_owned(),
+        out_dir,
+    })
+}
+
+/// Every problem with a row's outcome; empty when the row behaves.
+fn problems(row: &Row, o: &Outcome) -> Vec<String> {
+    let mut p = Vec::new();
+    match o.code {
+        None => p.push(format!("ended by a signal ({})", o.status)),
+        Some(0) => p.push("exit code 0: the bad input was accepted".into()),
+        Some(_) => {}
+    }
+    let lines: Vec<&str> = o.stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+    match lines.last() {
+        None => p.push("stderr is empty".into()),
+        Some(last) => {
+            if !last.starts_with("mortar: error:") {
+                p.push("the last stderr line does not start with 'mortar: error:'".into());
+            }
+            if !row.culprit.iter().any(|c| last.contains(c)) {
+                p.push(format!(
+                    "the error does not name the culprit {:?}",
+                    row.culprit
+                ));
+            }
+        }
+    }
+    if lines.len() > 1 {
+        p.push(format!("stderr has {} lines, not one", lines.len()));
+    }
+    for bad in ["panicked", "RUST_BACKTRACE"] {
+        if o.stderr.contains(bad) {
+            p.push(format!("stderr contains '{bad}'"));
+        }
+    }
+    if let Some(dir) = &o.out_dir {
+        for f in files_with_nan(dir) {
+            p.push(format!("NaN in {}", f.display()));
+        }
+    }
+    p
+}
+
+/// Files under `path` (a file or a folder) with a NaN token ("NaN", "nan", "-nan", ...).
+fn files_with_nan(path: &Path) -> Vec<PathBuf> {
+    if path.is_dir() {
+        let Ok(entries) = std::fs::read_dir(path) else {
+            return Vec::new();
+        };
+        let mut found = Vec::new();
+        for e in entries.flatten() {
+            found.extend(files_with_nan(&e.path()));
+        }
+        return found;
+    }
+    let Ok(bytes) = std::fs::read(path) else {
+        return Vec::new();
+    };
+    let text = String::from_utf8_lossy(&bytes);
+    let is_number_char = |c: char| c.is_ascii_alphanumeric() || "_.+-".contains(c);
+    let nan = text
+        .split(|c: char| !is_number_char(c))
+        .any(|t| t.trim_start_matches(['+', '-']).eq_ignore_ascii_case("nan"));
+    if nan {
+        vec![path.to_path_buf()]
+    } else {
+        Vec::new()
+    }
+}
+
+#[test]
+fn bad_inputs_fail_with_one_clear_line() {
+    let rows = rows();
+    let mut names: Vec<&str> = rows.iter().map(|r| r.name).collect();
+    names.sort_unstable();
+    names.dedup();
+    assert_eq!(names.len(), rows.len(), "row names must be unique");
+
+    let mut failures = String::new();
+    let mut failed = 0;
+    for row in &rows {
+        let (found, stderr) = match execute(row) {
+            Ok(o) => (problems(row, &o), o.stderr),
+            Err(e) => (vec![e], String::new()),
+        };
+        match (found.is_empty(), row.known_bug) {
+            (true, false) => {}
+            (true, true) => eprintln!(
+                "note: known-bug row '{}' now passes: remove its known_bug mark",
+                row.name
+            ),
+            (false, true) => eprintln!(
+                "warning: known bug, row '{}': {}",
+                row.name,
+                found.join("; ")
+            ),
+            (false, false) => {
+                failed += 1;
+                let _ = writeln!(failures, "\n=== {} ({:?})", row.name, row.sub);
+                for f in &found {
+                    let _ = writeln!(failures, "  - {f}");
+                }
+                let _ = writeln!(failures, "  stderr:");
+                for l in stderr.lines() {
+                    let _ = writeln!(failures, "    | {l}");
+                }
+            }
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{failed} of {} bad-input rows failed:{failures}",
+        rows.len()
+    );
+}
+
+#[test]
+fn valid_scene_runs() {
+    let row = run("valid_control", text(VALID), "");
+    let o = execute(&row).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(o.code, Some(0), "the valid scene failed: {}", o.stderr);
+    let nan = files_with_nan(
+        o.out_dir
+            .as_deref()
+            .expect("run rows have an output folder"),
+    );
+    assert!(nan.is_empty(), "NaN in {nan:?}");
+}

@@ -1,0 +1,203 @@
+//! Helpers shared by the integration tests: write a scene into a fresh folder, run the `mortar`
+//! binary (alone, or under `mpirun -n N --timeout`), and read what it wrote.
+
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// A fresh, empty folder under cargo's temporary test directory.
+pub fn fresh_dir(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Writes `case.toml` into a fresh folder named `name` and returns its path.
+pub fn write_case(name: &str, toml: &str) -> PathBuf {
+    let dir = fresh_dir(name);
+    let path = dir.join("case.toml");
+    std::fs::write(&path, toml).unwrap();
+    path
+}
+
+/// The MPI environment every run needs here (see shared/design/STACK.md).
+fn mpi_env(cmd: &mut Command) -> &mut Command {
+    cmd.env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .env("OMPI_MCA_mpi_yield_when_idle", "1")
+}
+
+/// Runs `mortar run CASE --out OUT ARGS` on `ranks` ranks (1: without mpirun). Panics with the
+/// output if the run fails.
+pub fn run_case(case: &Path, ranks: usize, args: &[&str]) -> (PathBuf, String) {
+    let out_dir = case.parent().unwrap().join(format!("out_{ranks}"));
+    let out = run_raw(case, ranks, &out_dir, args);
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        out.status.success(),
+        "mortar failed on {} ({ranks} ranks)\nstdout:\n{stdout}\nstderr:\n{}",
+        case.display(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    (out_dir, stdout)
+}
+
+/// Runs the binary and returns its raw output, whatever the exit status.
+pub fn run_raw(case: &Path, ranks: usize, out_dir: &Path, args: &[&str]) -> Output {
+    let exe = env!("CARGO_BIN_EXE_mortar");
+    let mut cmd = if ranks == 1 {
+        Command::new(exe)
+    } else {
+        let mut c = Command::new("mpirun");
+        c.args([
+            "-n",
+            &ranks.to_string(),
+            "--oversubscribe",
+            "--bind-to",
+            "none",
+        ])
+        .args(["--timeout", "300", exe]);
+        c
+    };
+    mpi_env(&mut cmd)
+        .arg("run")
+        .arg(case)
+        .arg("--out")
+        .arg(out_dir)
+        .args(args)
+        .output()
+        .expect("cannot start mortar (or mpirun)")
+}
+
+/// summary.json as JSON.
+pub fn summary(out_dir: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(out_dir.join("summary.json")).unwrap();
+    serde_json::from_str(&text).unwrap()
+}
+
+/// A metric from summary.json.
+pub fn metric(out_dir: &Path, name: &str) -> f64 {
+    summary(out_dir)["metrics"][name]
+        .as_f64()
+        .unwrap_or_else(|| panic!("no metric {name} in {}", out_dir.display()))
+}
+
+/// displacement.csv as rows of `[x, y, z, ux, uy, uz]`, by node.
+pub fn displacements(out_dir: &Path) -> Vec<[f64; 6]> {
+    let text = std::fs::read_to_string(out_dir.join("displacement.csv")).unwrap();
+    text.lines()
+        .skip(1)
+        .map(|l| {
+            let v: Vec<f64> = l.split(',').skip(1).map(|s| s.parse().unwrap()).collect();
+            [v[0], v[1], v[2], v[3], v[4], v[5]]
+        })
+        .collect()
+}
+
+/// Largest displacement difference relative to the largest displacement.
+pub fn max_rel_difference(a: &[[f64; 6]], b: &[[f64; 6]]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    let scale = a
+        .iter()
+        .flat_map(|r| r[3..].iter().map(|v| v.abs()))
+        .fold(0.0, f64::max);
+    let diff = a
+        .iter()
+        .zip(b)
+        .flat_map(|(r, s)| (3..6).map(move |k| (r[k] - s[k]).abs()))
+        .fold(0.0, f64::max);
+    diff / scale
+}
+
+/// The residual norms printed by `-snes_monitor`, one list per solve.
+pub fn snes_monitor_histories(stdout: &str) -> Vec<Vec<f64>> {
+    let mut all: Vec<Vec<f64>> = Vec::new();
+    for line in stdout.lines() {
+        let t: Vec<&str> = line.split_whitespace().collect();
+        if t.len() == 5 && t[1] == "SNES" && t[3] == "norm" {
+            let k: usize = t[0].parse().unwrap();
+            let r: f64 = t[4].parse().unwrap();
+            if k == 0 {
+                all.push(Vec::new());
+            }
+            all.last_mut().unwrap().push(r);
+        }
+    }
+    all
+}
+
+/// A Lamé thick-sphere octant scene (E = 1000, nu = 0.3, a = 1, b = 2, p = 1, dead load).
+pub fn thick_sphere_case(element: &str, n: usize) -> String {
+    format!(
+        r#"
+name = "thick_sphere"
+[[mesh]]
+body = "sphere"
+generator = "thick_sphere_octant"
+element = "{element}"
+n_circ = {n}
+n_rad = {n}
+inner_radius = 1.0
+outer_radius = 2.0
+[[material]]
+model = "linear_elastic"
+young = 1000.0
+poisson = 0.3
+[[symmetry]]
+set = "sphere.symx"
+normal = "x"
+[[symmetry]]
+set = "sphere.symy"
+normal = "y"
+[[symmetry]]
+set = "sphere.symz"
+normal = "z"
+[[pressure]]
+set = "sphere.inner"
+value = 1.0
+follower = false
+[verification]
+kind = "lame_sphere"
+inner_radius = 1.0
+outer_radius = 2.0
+pressure = 1.0
+"#
+    )
+}
+
+/// A Neo-Hookean block, compressed by `strain` along z in `steps` steps, free to expand sideways
+/// (symmetry planes on xmin, ymin, zmin).
+pub fn compressed_block(element: &str, strain: f64, steps: usize) -> String {
+    format!(
+        r#"
+[[mesh]]
+body = "b"
+generator = "box"
+element = "{element}"
+divisions = [3, 3, 3]
+lo = [0.0, 0.0, 0.0]
+hi = [1.0, 1.0, 1.0]
+[[material]]
+model = "neo_hookean"
+young = 100.0
+poisson = 0.3
+[[symmetry]]
+set = "b.xmin"
+normal = "x"
+[[symmetry]]
+set = "b.ymin"
+normal = "y"
+[[symmetry]]
+set = "b.zmin"
+normal = "z"
+[[dirichlet]]
+set = "b.zmax"
+components = ["z"]
+value = [-{strain}]
+[steps]
+count = {steps}
+"#
+    )
+}
