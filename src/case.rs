@@ -12,6 +12,14 @@ use crate::io::case_file::{CaseFile, LoadCurveSpec, MeshPart};
 use crate::material::Material;
 use crate::mesh::{FaceRef, Mesh};
 
+/// Largest accepted `newton.max_it`.
+const MAX_NEWTON_ITS: usize = 10_000;
+/// Largest accepted `steps.count`.
+const MAX_STEPS: usize = 1_000_000;
+/// Largest mesh a generator may build (hexahedra per part), so a typo in `divisions` is an
+/// error rather than an exhausted memory.
+const MAX_GENERATED_ELEMENTS: usize = 20_000_000;
+
 /// A value's dependence on the load factor t in [0, 1].
 #[derive(Clone, Debug, PartialEq)]
 pub enum LoadCurve {
@@ -292,10 +300,23 @@ impl Scene {
             return Err(err("steps.count must be at least 1".into()));
         }
         let n = &file.newton;
-        if !(n.rtol > 0.0 && n.atol > 0.0 && n.max_it > 0) {
-            return Err(err(
-                "newton: rtol and atol must be > 0 and max_it >= 1".into()
-            ));
+        if !(n.rtol > 0.0 && n.atol > 0.0 && n.rtol.is_finite() && n.atol.is_finite()) {
+            return Err(err(format!(
+                "newton: rtol = {} and atol = {} must be finite and > 0",
+                n.rtol, n.atol
+            )));
+        }
+        if !(1..=MAX_NEWTON_ITS).contains(&n.max_it) {
+            return Err(err(format!(
+                "newton.max_it = {}: must be in 1..={MAX_NEWTON_ITS}",
+                n.max_it
+            )));
+        }
+        if file.steps.count > MAX_STEPS {
+            return Err(err(format!(
+                "steps.count = {}: at most {MAX_STEPS}",
+                file.steps.count
+            )));
         }
         let verification = match &file.verification {
             None => None,
@@ -521,6 +542,26 @@ fn build_part(p: &MeshPart, i: usize, dir: &Path, err: &dyn Fn(String) -> Error)
         }
         Ok(d)
     };
+    for (name, v) in [("lo", p.lo), ("hi", p.hi), ("translate", p.translate)] {
+        if let Some(v) = v {
+            if v.iter().any(|c| !c.is_finite()) {
+                return Err(err(format!("{key}.{name} = {v:?}: must be finite")));
+            }
+        }
+    }
+    if !p.distort.is_finite() {
+        return Err(err(format!("{key}.distort must be finite")));
+    }
+    let count = match (p.generator.as_str(), p.divisions, p.n_circ, p.n_rad) {
+        ("box" | "beam", Some(d), _, _) => d.iter().map(|&v| v as f64).product::<f64>(),
+        ("thick_sphere_octant", _, Some(c), Some(r)) => 3.0 * (c as f64).powi(2) * r as f64,
+        _ => 0.0,
+    };
+    if count > MAX_GENERATED_ELEMENTS as f64 {
+        return Err(err(format!(
+            "{key}: {count:.0} hexahedra requested; at most {MAX_GENERATED_ELEMENTS}"
+        )));
+    }
     if p.generator != "gmsh" && p.file.is_some() {
         return Err(err(format!("{key}.file is only for generator \"gmsh\"")));
     }

@@ -57,15 +57,23 @@ enum Command {
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().collect();
     let program = args.first().cloned().unwrap_or_else(|| "mortar".into());
-    let cli = match Cli::try_parse_from(pull_our_options(&args)) {
+    let args = match pull_our_options(&args) {
+        Ok(a) => a,
+        Err(msg) => {
+            eprintln!("mortar: error: {msg}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let cli = match Cli::try_parse_from(args) {
         Ok(c) => c,
-        Err(e) => {
+        Err(e) if !e.use_stderr() => {
+            // --help, --version
             let _ = e.print();
-            return if e.use_stderr() {
-                ExitCode::FAILURE
-            } else {
-                ExitCode::SUCCESS
-            };
+            return ExitCode::SUCCESS;
+        }
+        Err(e) => {
+            eprintln!("mortar: error: {}", clap_one_line(&e));
+            return ExitCode::FAILURE;
         }
     };
     match execute(cli, program) {
@@ -77,11 +85,23 @@ fn main() -> ExitCode {
     }
 }
 
+/// clap's message without its usage block, on one line.
+fn clap_one_line(e: &clap::Error) -> String {
+    let text = e.render().to_string();
+    text.lines()
+        .map(str::trim)
+        .take_while(|l| !l.starts_with("Usage:"))
+        .filter(|l| !l.is_empty())
+        .map(|l| l.trim_start_matches("error: "))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
 /// Moves `--out DIR` and `--quiet` found among the PETSc options (after the case file) in front
 /// of the case file, so clap sees them whatever their position.
-fn pull_our_options(args: &[String]) -> Vec<String> {
+fn pull_our_options(args: &[String]) -> Result<Vec<String>, String> {
     let Some(run_at) = args.iter().position(|a| a == "run") else {
-        return args.to_vec();
+        return Ok(args.to_vec());
     };
     let mut head: Vec<String> = args[..=run_at].to_vec();
     let mut rest: Vec<String> = Vec::new();
@@ -90,8 +110,9 @@ fn pull_our_options(args: &[String]) -> Vec<String> {
         match a.as_str() {
             "--out" => {
                 head.push(a.clone());
-                if let Some(v) = it.next() {
-                    head.push(v.clone());
+                match it.next() {
+                    Some(v) if !v.starts_with('-') => head.push(v.clone()),
+                    _ => return Err("--out needs a folder (--out DIR)".into()),
                 }
             }
             s if s.starts_with("--out=") || s == "--quiet" || s == "-q" => head.push(a.clone()),
@@ -99,7 +120,7 @@ fn pull_our_options(args: &[String]) -> Vec<String> {
         }
     }
     head.extend(rest);
-    head
+    Ok(head)
 }
 
 fn execute(cli: Cli, program: String) -> Result<()> {

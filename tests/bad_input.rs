@@ -12,9 +12,7 @@
 //! - stderr contains neither `panicked` nor `RUST_BACKTRACE`;
 //! - no file in the output folder (`run` only) contains a NaN.
 //!
-//! All rows run, then one assertion lists every failing row with its stderr. Rows marked
-//! `known_bug` (each with a `FIXME(src)` comment saying what to fix) print a warning instead of
-//! failing, and a note when they start passing so the mark can be removed. Each row's folder
+//! All rows run, then one assertion lists every failing row with its stderr. Each row's folder
 //! keeps its inputs, `stdout.txt` and `stderr.txt` after the run.
 //!
 //! A control test runs the unedited [`VALID`] scene and expects success, so the rows are known
@@ -118,8 +116,6 @@ struct Row {
     args: Vec<&'static str>,
     /// The error line must contain at least one of these.
     culprit: Vec<&'static str>,
-    /// A known bug in src/: a failure prints a warning instead of failing the test.
-    known_bug: bool,
 }
 
 impl Row {
@@ -131,7 +127,6 @@ impl Row {
             sub,
             args: Vec::new(),
             culprit: vec![culprit],
-            known_bug: false,
         }
     }
 
@@ -148,11 +143,6 @@ impl Row {
     /// Also accepts `other` as the culprit.
     fn or(mut self, other: &'static str) -> Row {
         self.culprit.push(other);
-        self
-    }
-
-    fn known_bug(mut self) -> Row {
-        self.known_bug = true;
         self
     }
 }
@@ -240,17 +230,11 @@ fn rows() -> Vec<Row> {
             valid_with("hi = [1.0, 1.0, 1.0]", "hi = [1.0, 0.0, 1.0]"),
             "mesh[0]: hi",
         ),
-        // FIXME(src): src/case.rs, "box" branch of build_part (~line 530): a NaN corner passes
-        // the `hi[d] <= lo[d]` test and is only caught by Mesh::check as "mesh: node 0 has
-        // non-finite coordinates", which does not name the key. Fix: before that test, reject
-        // non-finite `lo`/`hi` entries (and `translate`, in build_mesh) with
-        // "mesh[{i}].lo = [...]: every entry must be finite".
         check(
             "box_lo_nan",
             valid_with("lo = [0.0, 0.0, 0.0]", "lo = [nan, 0.0, 0.0]"),
             "mesh[0].lo",
-        )
-        .known_bug(),
+        ),
         check(
             "distort_too_large",
             valid_with("divisions", "distort = 0.5\ndivisions"),
@@ -275,23 +259,10 @@ fn rows() -> Vec<Row> {
             .file("mesh.msh", Data("not_a_face.msh")),
         check("msh_inverted_hex", text(GMSH), "Gmsh element 7")
             .file("mesh.msh", Data("bad/inverted_hex.msh")),
-        // FIXME(src): src/io/gmsh.rs, Reader::parse (~line 216): mshio panics on a $Nodes header
-        // that counts 0 nodes (mshio nodes_section.rs:39, subtract with overflow);
-        // catch_unwind turns it into an error, but the default panic hook has already printed
-        // "thread 'main' panicked at ..." to stderr. Fix: install a silent hook around the
-        // catch_unwind (`let hook = std::panic::take_hook(); std::panic::set_hook(Box::new(
-        // |_| {}));` ... `std::panic::set_hook(hook);`), and/or reject a zero count first.
         check("msh_zero_node_count", text(GMSH), "mesh.msh")
-            .file("mesh.msh", Data("bad/zero_node_count.msh"))
-            .known_bug(),
-        // FIXME(src): src/io/gmsh.rs:264, `HashMap::with_capacity(nodes.num_nodes as usize)`,
-        // trusts the $Nodes header count: 10^13 aborts the process (allocation failure,
-        // SIGABRT). Fix: size it by the nodes actually read,
-        // `nodes.node_blocks.iter().map(|b| b.nodes.len()).sum()`, and reject a header count
-        // that differs ("$Nodes header counts N nodes, the blocks hold M").
+            .file("mesh.msh", Data("bad/zero_node_count.msh")),
         check("msh_huge_node_count", text(GMSH), "mesh.msh")
-            .file("mesh.msh", Data("bad/huge_node_count.msh"))
-            .known_bug(),
+            .file("mesh.msh", Data("bad/huge_node_count.msh")),
         // --- [[material]].
         check(
             "young_wrong_type",
@@ -436,17 +407,11 @@ value = [0.0, 0.0, -1.0]
             valid_plus("[newton]\nrtol = 0.0\n"),
             "rtol",
         ),
-        // FIXME(src): src/petsc/snes.rs:94 allocates `vec![0.0; tol.max_it + 2]` before anything
-        // checks max_it: 10^14 aborts the process (allocation failure, SIGABRT). Fix: bound it
-        // in src/case.rs next to the rtol/atol check ("newton.max_it = N: must be in
-        // 1..=10000"), and in Snes::new start `history` empty: it is resized anyway from the
-        // value PETSc settles on after SNESSetFromOptions.
         run(
             "newton_max_it_absurd",
             valid_plus("[newton]\nmax_it = 100000000000000\n"),
             "max_it",
-        )
-        .known_bug(),
+        ),
         check(
             "verification_kind_unknown",
             valid_plus("[verification]\nkind = \"hertz\"\n"),
@@ -462,29 +427,15 @@ value = [0.0, 0.0, -1.0]
             .or("KSP")
             .args(&["-ksp_type", "nonsense"]),
         run("pc_type_nonsense", text(VALID), "nonsense").args(&["-pc_type", "nonsense"]),
-        // FIXME(src): PETSc's message is only "Input string abc has no integer value", naming
-        // neither the option nor the options file. Fix: in src/petsc/snes.rs:112, add to an
-        // error of SNESSetFromOptions "while applying the PETSc options (command line and
-        // <options file>)"; to name the option, find the entry holding the bad value in the
-        // options database (PetscOptionsGetAll) and add "-snes_max_it abc".
         run(
             "petscrc_bad_integer",
             valid_top(r#"petsc_options = "petscrc""#),
             "petscrc",
         )
         .or("snes_max_it")
-        .file("petscrc", Text("-snes_max_it abc\n"))
-        .known_bug(),
+        .file("petscrc", Text("-snes_max_it abc\n")),
         // --- The command line.
-        // FIXME(src): src/main.rs, pull_our_options (~line 91): a trailing `--out` without a value
-        // is moved in front of the case file, so clap takes the case file as the folder and
-        // prints "the following required arguments were not provided: <CASE>" and the usage,
-        // not one "mortar: error:" line. Fix: when `--out` has no value return "mortar: error:
-        // --out needs a folder"; and in main() print clap's errors as one line,
-        // `mortar: error: <first line of e.render() without its "error: " prefix>`.
-        run("out_without_value", text(VALID), "--out")
-            .args(&["--out"])
-            .known_bug(),
+        run("out_without_value", text(VALID), "--out").args(&["--out"]),
         run("out_is_a_file", text(VALID), "results")
             .file("results", Text("not a folder\n"))
             .args(&["--out", "results"]),
@@ -665,27 +616,15 @@ fn bad_inputs_fail_with_one_clear_line() {
             Ok(o) => (problems(row, &o), o.stderr),
             Err(e) => (vec![e], String::new()),
         };
-        match (found.is_empty(), row.known_bug) {
-            (true, false) => {}
-            (true, true) => eprintln!(
-                "note: known-bug row '{}' now passes: remove its known_bug mark",
-                row.name
-            ),
-            (false, true) => eprintln!(
-                "warning: known bug, row '{}': {}",
-                row.name,
-                found.join("; ")
-            ),
-            (false, false) => {
-                failed += 1;
-                let _ = writeln!(failures, "\n=== {} ({:?})", row.name, row.sub);
-                for f in &found {
-                    let _ = writeln!(failures, "  - {f}");
-                }
-                let _ = writeln!(failures, "  stderr:");
-                for l in stderr.lines() {
-                    let _ = writeln!(failures, "    | {l}");
-                }
+        if !found.is_empty() {
+            failed += 1;
+            let _ = writeln!(failures, "\n=== {} ({:?})", row.name, row.sub);
+            for f in &found {
+                let _ = writeln!(failures, "  - {f}");
+            }
+            let _ = writeln!(failures, "  stderr:");
+            for l in stderr.lines() {
+                let _ = writeln!(failures, "    | {l}");
             }
         }
     }

@@ -213,6 +213,10 @@ impl Reader {
 
     /// Runs `mshio`, turning its errors (and, defensively, panics) into messages.
     fn parse(&self, bytes: &[u8]) -> Result<mshio::MshFile<u64, i32, f64>> {
+        // mshio panics on some malformed headers: silence the default hook so the panic
+        // becomes our one-line error, not a message plus a backtrace note.
+        let hook = std::panic::take_hook();
+        std::panic::set_hook(Box::new(|_| {}));
         let parsed = std::panic::catch_unwind(|| {
             mshio::parse_msh_bytes(bytes).map_err(|e| {
                 let trace = e.filtered_backtrace();
@@ -243,6 +247,7 @@ impl Reader {
                 )
             })
         });
+        std::panic::set_hook(hook);
         match parsed {
             Ok(Ok(f)) => Ok(f),
             Ok(Err(msg)) => Err(self.err(msg)),
@@ -261,7 +266,15 @@ impl Reader {
             .ok_or_else(|| self.err("no $Elements section"))?;
 
         // Node coordinates by tag.
-        let mut coords: HashMap<u64, [f64; 3]> = HashMap::with_capacity(nodes.num_nodes as usize);
+        // Sized from the nodes actually read, never from the header's claim.
+        let read: usize = nodes.node_blocks.iter().map(|b| b.nodes.len()).sum();
+        if read as u64 != nodes.num_nodes {
+            return Err(self.err(format!(
+                "$Nodes header claims {} nodes but its blocks hold {read}",
+                nodes.num_nodes
+            )));
+        }
+        let mut coords: HashMap<u64, [f64; 3]> = HashMap::with_capacity(read);
         let mut next_tag = nodes.min_node_tag;
         for block in &nodes.node_blocks {
             match &block.node_tags {

@@ -146,6 +146,8 @@ impl Mesh {
         }
         let mut have: Vec<String> = self.node_sets.keys().cloned().collect();
         have.extend(self.face_sets.keys().cloned());
+        have.sort();
+        have.dedup();
         Err(Error::Mesh(format!(
             "no node or face set '{name}' (have: {})",
             have.join(", ")

@@ -92,13 +92,14 @@ pub struct Snes {
 }
 
 impl Snes {
-    /// A Newton solver with the project's defaults, then `SNESSetFromOptions`.
-    pub fn new(tol: Tolerances) -> Result<Snes> {
+    /// A Newton solver with the project's defaults, then `SNESSetFromOptions`. `options_source`
+    /// names where the options came from, for the error message when one is invalid.
+    pub fn new(tol: Tolerances, options_source: &str) -> Result<Snes> {
         let mut raw: p::SNES = std::ptr::null_mut();
         chk!(SNESCreate(super::comm_world(), &mut raw))?;
         let snes = Snes {
             raw,
-            history: vec![0.0; tol.max_it + 2],
+            history: Vec::new(),
         };
         chk!(SNESSetType(snes.raw, c"newtonls".as_ptr()))?;
         let mut ls: p::SNESLineSearch = std::ptr::null_mut();
@@ -119,7 +120,12 @@ impl Snes {
             super::to_petsc_int(tol.max_it)?,
             -1
         ))?;
-        chk!(SNESSetFromOptions(snes.raw))?;
+        chk!(SNESSetFromOptions(snes.raw)).map_err(|e| match e {
+            Error::Petsc { msg, .. } => {
+                Error::Other(format!("PETSc options ({options_source}): {msg}"))
+            }
+            other => other,
+        })?;
         let mut max_it: PetscInt = 0;
         let mut max_f: PetscInt = 0;
         chk!(SNESGetTolerances(

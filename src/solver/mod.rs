@@ -98,12 +98,15 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         assembly_seconds: 0.0,
     });
     let force_scale = residual_scale(scene, &dofs, &bulk, &state, &x, &world)?;
-    let mut snes = Snes::new(Tolerances {
-        atol: scene.newton.atol * force_scale,
-        rtol: scene.newton.rtol,
-        stol: 1e-14,
-        max_it: scene.newton.max_it,
-    })?;
+    let mut snes = Snes::new(
+        Tolerances {
+            atol: scene.newton.atol * force_scale,
+            rtol: scene.newton.rtol,
+            stol: 1e-14,
+            max_it: scene.newton.max_it,
+        },
+        &options_source(scene),
+    )?;
     let mut results = Results::new(scene, &dofs, &opts.out_dir, rank, ranks)?;
     drop(setup_guard);
     phases.add("setup", t_setup.elapsed().as_secs_f64());
@@ -272,6 +275,14 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
     match &summary.message {
         Some(m) if !summary.converged => Err(Error::Solve(m.clone())),
         _ => Ok(summary),
+    }
+}
+
+/// Where PETSc's options came from, for messages.
+fn options_source(scene: &Scene) -> String {
+    match &scene.petsc_options {
+        Some(f) => format!("command line or {}", f.display()),
+        None => "command line".into(),
     }
 }
 
