@@ -43,12 +43,9 @@ pub(super) unsafe extern "C" fn capture_error(
             unsafe { p::PetscErrorMessage(code, &mut generic, std::ptr::null_mut()) };
             msg = text(generic);
         }
-        let msg = format!(
-            "{} (in {}() at {}:{line})",
-            msg.trim(),
-            text(func),
-            text(file)
-        );
+        // One line: PETSc's messages may span several.
+        let msg = msg.split_whitespace().collect::<Vec<_>>().join(" ");
+        let msg = format!("{msg} (in {}() at {}:{line})", text(func), text(file));
         LAST_MESSAGE.with(|m| *m.borrow_mut() = Some(msg));
     }
     code

@@ -14,11 +14,15 @@ use crate::error::Result;
 pub struct Stage(p::PetscLogStage);
 
 impl Stage {
-    /// Registers a stage under `name` (shown by `-log_view`).
+    /// The stage called `name` (shown by `-log_view`), registered on first use; PETSc refuses a
+    /// name twice, so a second run in the same process reuses the first registration.
     pub fn register(name: &str) -> Result<Stage> {
         let c = std::ffi::CString::new(name).expect("stage names have no NUL");
-        let mut id: p::PetscLogStage = 0;
-        chk!(PetscLogStageRegister(c.as_ptr(), &mut id))?;
+        let mut id: p::PetscLogStage = -1;
+        chk!(PetscLogStageGetId(c.as_ptr(), &mut id))?;
+        if id < 0 {
+            chk!(PetscLogStageRegister(c.as_ptr(), &mut id))?;
+        }
         Ok(Stage(id))
     }
 
@@ -77,6 +81,11 @@ impl Phases {
     /// [`Phases::add`].
     pub fn push(&self, name: &'static str) -> Result<Option<StageGuard>> {
         self.stages.get(name).map(|s| s.push()).transpose()
+    }
+
+    /// The PETSc log stage of phase `name`, to push where the phase runs inside callbacks.
+    pub fn stage(&self, name: &'static str) -> Option<Stage> {
+        self.stages.get(name).copied()
     }
 
     /// Adds time measured elsewhere to a phase.

@@ -134,8 +134,11 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         state.borrow_mut().t = t_new;
         state.borrow_mut().assembly_seconds = 0.0;
         let t_solve = Instant::now();
+        let assembly_stage = phases.stage("assembly");
+        let solve_guard = phases.push("solve")?;
         let outcome = {
             let mut residual = |xv: &Vector, f: &mut Vector| -> Result<(), CallbackError> {
+                let _stage = assembly_stage.map(|st| st.push()).transpose()?;
                 let mut s = state.borrow_mut();
                 let t0 = Instant::now();
                 s.load(scene, &dofs, xv)?;
@@ -144,6 +147,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                 collective_domain_check(&world, inv)
             };
             let mut jacobian = |xv: &Vector, j: &mut Matrix| -> Result<(), CallbackError> {
+                let _stage = assembly_stage.map(|st| st.push()).transpose()?;
                 let mut s = state.borrow_mut();
                 let t0 = Instant::now();
                 s.load(scene, &dofs, xv)?;
@@ -153,6 +157,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
             };
             snes.solve(&mut x, &mut jac, &mut residual, &mut jacobian)?
         };
+        drop(solve_guard);
         let assembly = state.borrow().assembly_seconds;
         let solve_seconds = t_solve.elapsed().as_secs_f64();
         phases.add("assembly", assembly);
@@ -189,6 +194,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         step += 1;
         t = t_new;
         let t_out = Instant::now();
+        let output_guard = phases.push("output")?;
         state.borrow_mut().load(scene, &dofs, &x)?;
         let s = state.borrow();
         let reactions = results.reactions(scene, &dofs, &bulk, &s.u, t, &world)?;
@@ -218,6 +224,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
             cut: cuts_in_row,
             converged: true,
         });
+        drop(output_guard);
         phases.add("output", t_out.elapsed().as_secs_f64());
         say(format!(
             "  step {step} load {t:.6}: {} Newton its, |F| {final_res:.3e}, {} linear its{}, {:.2} s",

@@ -1,0 +1,165 @@
+//! The safe PETSc layer: what happens at the C boundary.
+//!
+//! MPI can be initialized once per process, so every check runs inside one test function, in
+//! order, under one `Petsc` guard (cargo runs each integration-test file as its own process).
+//!
+//! Checked:
+//! - a SNES solve of a small nonlinear system (x_i^2 = i + 1) converges to sqrt(i + 1) with
+//!   Newton's quadratic rate;
+//! - a panic inside the residual closure is caught at the C boundary and re-raised after
+//!   `SNESSolve` returns, with its payload, and the solver is usable afterwards;
+//! - an error returned by the Jacobian closure comes back as that error;
+//! - a domain error ends the solve with `DIVERGED_FUNCTION_DOMAIN` and carries the message;
+//! - a PETSc error (a nonzero outside the preallocated pattern) comes back as `Error::Petsc`
+//!   with PETSc's own message and the Rust call site.
+
+use std::panic::{catch_unwind, AssertUnwindSafe};
+
+use mortar::petsc::snes::Tolerances;
+use mortar::petsc::{CallbackError, Matrix, Petsc, Snes, Sparsity, Vector};
+use mortar::Error;
+
+const N: usize = 4;
+
+fn diagonal_pattern() -> Sparsity {
+    Sparsity {
+        row_start: 0,
+        rows: (0..N as i32).map(|i| vec![i]).collect(),
+    }
+}
+
+fn tolerances() -> Tolerances {
+    Tolerances {
+        atol: 1e-14,
+        rtol: 1e-12,
+        stol: 1e-16,
+        max_it: 20,
+    }
+}
+
+/// F_i(x) = x_i^2 - (i + 1).
+fn residual(x: &Vector, f: &mut Vector) -> Result<(), CallbackError> {
+    let xs = x.to_local_vec()?;
+    f.with_local_mut(|fs| {
+        for (i, v) in fs.iter_mut().enumerate() {
+            *v = xs[i] * xs[i] - (i as f64 + 1.0);
+        }
+    })?;
+    Ok(())
+}
+
+/// J = diag(2 x_i).
+fn jacobian(x: &Vector, j: &mut Matrix) -> Result<(), CallbackError> {
+    let xs = x.to_local_vec()?;
+    j.zero_entries()?;
+    for (i, xi) in xs.iter().enumerate() {
+        j.add_values(&[i as i32], &[i as i32], &[2.0 * xi])?;
+    }
+    j.assemble()?;
+    Ok(())
+}
+
+fn start(x: &mut Vector) {
+    x.set_all(1.0).unwrap();
+}
+
+#[test]
+fn petsc_layer_boundary_behaviour() {
+    let petsc = Petsc::initialize(&["petsc_layer".to_string()], None).unwrap();
+    assert_eq!(petsc.size(), 1);
+    let mut x = Vector::new_mpi(N).unwrap();
+    let mut jac = Matrix::new_aij(&diagonal_pattern()).unwrap();
+    let mut snes = Snes::new(tolerances(), "test").unwrap();
+
+    // 1. A converging solve.
+    start(&mut x);
+    let out = snes
+        .solve(&mut x, &mut jac, &mut residual, &mut jacobian)
+        .unwrap();
+    assert!(out.converged, "{}", out.reason);
+    let xs = x.to_local_vec().unwrap();
+    for (i, v) in xs.iter().enumerate() {
+        assert!((v - (i as f64 + 1.0).sqrt()).abs() < 1e-12);
+    }
+    let h = &out.residual_history;
+    let n = h.len();
+    assert!(n >= 4, "history {h:?}");
+    let order = (h[n - 2] / h[n - 3]).ln() / (h[n - 3] / h[n - 4]).ln();
+    assert!(order > 1.8, "Newton order {order} from {h:?}");
+
+    // 2. A panic in the residual is re-raised after the solve, with its payload.
+    start(&mut x);
+    let mut calls = 0;
+    let mut panicking = |x: &Vector, f: &mut Vector| -> Result<(), CallbackError> {
+        calls += 1;
+        if calls == 2 {
+            panic!("residual exploded");
+        }
+        residual(x, f)
+    };
+    let caught = catch_unwind(AssertUnwindSafe(|| {
+        snes.solve(&mut x, &mut jac, &mut panicking, &mut jacobian)
+    }));
+    let payload = caught.expect_err("the panic must be re-raised");
+    let msg = payload
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .unwrap_or_default();
+    assert_eq!(msg, "residual exploded");
+
+    // The solver still works after a caught panic.
+    start(&mut x);
+    let out = snes
+        .solve(&mut x, &mut jac, &mut residual, &mut jacobian)
+        .unwrap();
+    assert!(out.converged);
+
+    // 3. An error from the Jacobian closure is returned as that error.
+    start(&mut x);
+    let mut failing = |_: &Vector, _: &mut Matrix| -> Result<(), CallbackError> {
+        Err(CallbackError::Fatal(Error::Solve(
+            "tangent unavailable".into(),
+        )))
+    };
+    match snes.solve(&mut x, &mut jac, &mut residual, &mut failing) {
+        Err(Error::Solve(m)) => assert_eq!(m, "tangent unavailable"),
+        other => panic!("expected the closure's error, got {other:?}"),
+    }
+
+    // 4. A domain error ends the solve as DIVERGED_FUNCTION_DOMAIN, with the message kept.
+    start(&mut x);
+    let mut outside = |x: &Vector, f: &mut Vector| -> Result<(), CallbackError> {
+        residual(x, f)?;
+        Err(CallbackError::Domain("element 7 inverted".into()))
+    };
+    let out = snes
+        .solve(&mut x, &mut jac, &mut outside, &mut jacobian)
+        .unwrap();
+    assert!(!out.converged);
+    assert_eq!(out.reason, "DIVERGED_FUNCTION_DOMAIN");
+    assert_eq!(out.domain_error.as_deref(), Some("element 7 inverted"));
+
+    // 5. A nonzero outside the preallocated pattern is a PETSc error with PETSc's message.
+    let err = jac
+        .add_values(&[0], &[1], &[1.0])
+        .expect_err("new nonzeros must be an error");
+    match err {
+        Error::Petsc {
+            call,
+            location,
+            msg,
+            ..
+        } => {
+            assert_eq!(call, "MatSetValues");
+            assert!(location.file().ends_with("matrix.rs"), "{location}");
+            assert!(msg.contains("New nonzero at (0,1)"), "{msg}");
+            assert!(!msg.contains('\n'), "one line: {msg}");
+        }
+        other => panic!("expected a PETSc error, got {other:?}"),
+    }
+
+    drop(snes);
+    drop(jac);
+    drop(x);
+    drop(petsc);
+}

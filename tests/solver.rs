@@ -1,0 +1,137 @@
+//! The solver's contract: loads and reactions against statics, step cutting, log stages, and
+//! every shipped scene valid.
+
+mod common;
+
+use std::process::Command;
+
+/// A 1 x 1 x 4 linear-elastic column, clamped at z = 0.
+fn column(extra: &str) -> String {
+    format!(
+        r#"
+[[mesh]]
+body = "c"
+generator = "box"
+element = "hex20"
+divisions = [1, 1, 4]
+lo = [0.0, 0.0, 0.0]
+hi = [1.0, 1.0, 4.0]
+[[material]]
+model = "linear_elastic"
+young = 1000.0
+poisson = 0.25
+[[dirichlet]]
+set = "c.zmin"
+components = ["x", "y", "z"]
+{extra}
+"#
+    )
+}
+
+fn reaction(out: &std::path::Path, column_name: &str) -> f64 {
+    let text = std::fs::read_to_string(out.join("history.csv")).unwrap();
+    let mut lines = text.lines();
+    let cols: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let k = cols.iter().position(|c| *c == column_name).unwrap();
+    let last = lines.last().unwrap();
+    last.split(',').nth(k).unwrap().parse().unwrap()
+}
+
+/// Statics: the support carries the weight (body force -2 per unit volume on volume 4 gives a
+/// reaction of +8 along z) and a dead pressure of 3 on the top (area 1) adds +3.
+#[test]
+fn reactions_balance_body_force_and_pressure() {
+    let case = common::write_case(
+        "statics_column",
+        &column(
+            "[[body_force]]\nvalue = [0.0, 0.0, -2.0]\n[[pressure]]\nset = \"c.zmax\"\nvalue = 3.0\nfollower = false\n",
+        ),
+    );
+    let (out, _) = common::run_case(&case, 1, &["-q"]);
+    let rz = reaction(&out, "reaction_c.zmin_z");
+    assert!((rz - 11.0).abs() < 1e-10, "reaction {rz}");
+    let rx = reaction(&out, "reaction_c.zmin_x");
+    assert!(rx.abs() < 1e-10, "reaction x {rx}");
+}
+
+/// A block compressed 60 % in one step inverts its top elements on the first Newton iterate:
+/// the step is cut (reported), and the halved steps converge.
+#[test]
+fn a_failing_step_is_cut_and_retried() {
+    let case = common::write_case("cut_block", &common::compressed_block("hex8", 0.6, 1));
+    let (out, stdout) = common::run_case(&case, 1, &[]);
+    let s = common::summary(&out);
+    assert_eq!(s["converged"], true);
+    let steps = s["steps"].as_array().unwrap();
+    assert!(steps.len() > 1, "expected the single step to be split");
+    let cuts: u64 = steps.iter().map(|st| st["cut"].as_u64().unwrap()).sum();
+    assert!(cuts >= 1, "no cut recorded: {steps:?}");
+    assert!(stdout.contains("cut 1/"), "cut not reported:\n{stdout}");
+    assert_eq!(steps.last().unwrap()["load"].as_f64().unwrap(), 1.0);
+}
+
+/// With no cuts allowed the same scene fails: one clear line, exit 1, and a summary that says
+/// so (finished steps, none here, stay on disk).
+#[test]
+fn a_step_that_cannot_be_cut_fails_clearly() {
+    let toml = common::compressed_block("hex8", 0.6, 1)
+        .replace("[steps]\ncount = 1", "[steps]\ncount = 1\nmax_cuts = 0");
+    let case = common::write_case("cut_block_fail", &toml);
+    let out_dir = case.parent().unwrap().join("out");
+    let out = common::run_raw(&case, 1, &out_dir, &["-q"]);
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 1, "stderr: {stderr}");
+    assert!(
+        lines[0].starts_with("mortar: error: solve:"),
+        "{}",
+        lines[0]
+    );
+    assert!(lines[0].contains("did not converge"), "{}", lines[0]);
+    let s = common::summary(&out_dir);
+    assert_eq!(s["converged"], false);
+    assert!(s["message"].as_str().unwrap().contains("inverted"));
+}
+
+/// `-log_view` shows the solver's phases as PETSc log stages.
+#[test]
+fn phases_are_petsc_log_stages() {
+    let case = common::write_case("log_stages", &column(""));
+    let (_, stdout) = common::run_case(&case, 1, &["-q", "-log_view"]);
+    for stage in ["setup", "assembly", "solve", "output"] {
+        assert!(
+            stdout
+                .lines()
+                .any(|l| l.trim_start().starts_with(&format!("{}:", stage))
+                    || l.contains(&format!(": {stage}"))),
+            "stage {stage} missing from -log_view"
+        );
+    }
+}
+
+/// Every scene shipped in cases/ passes `mortar check`.
+#[test]
+fn every_shipped_case_is_valid() {
+    let cases = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases");
+    let mut n = 0;
+    for entry in std::fs::read_dir(&cases).unwrap() {
+        let case = entry.unwrap().path().join("case.toml");
+        if !case.is_file() {
+            continue;
+        }
+        n += 1;
+        let out = Command::new(env!("CARGO_BIN_EXE_mortar"))
+            .arg("check")
+            .arg(&case)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}: {}",
+            case.display(),
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    assert!(n >= 1);
+}
