@@ -36,14 +36,7 @@ fn compressed_block_converges_quadratically() {
             &common::compressed_block(el, 0.3, 6),
         );
         let (out, stdout) = common::run_case(&case, 1, &["-snes_monitor"]);
-        let s = common::summary(&out);
-        assert_eq!(s["converged"], true);
-        let its: Vec<u64> = s["steps"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|st| st["newton_its"].as_u64().unwrap())
-            .collect();
+        let its = common::converged_newton_its(&out);
         assert_eq!(its.len(), 6, "{el}: steps were cut: {its:?}");
         assert!(
             its.iter().all(|&k| k <= 8),
@@ -131,14 +124,7 @@ count = 6
 "#,
     );
     let (out, stdout) = common::run_case(&case, 1, &["-snes_monitor"]);
-    let s = common::summary(&out);
-    assert_eq!(s["converged"], true);
-    let its: Vec<u64> = s["steps"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|st| st["newton_its"].as_u64().unwrap())
-        .collect();
+    let its = common::converged_newton_its(&out);
     assert_eq!(its.len(), 6, "steps were cut: {its:?}");
     assert!(its.iter().all(|&k| k <= 8), "Newton iterations {its:?}");
     let ord = orders(&common::snes_monitor_histories(&stdout));

@@ -77,6 +77,18 @@ pub fn summary(out_dir: &Path) -> serde_json::Value {
     serde_json::from_str(&text).unwrap()
 }
 
+/// Newton iterations of every step of a run that must have converged.
+pub fn converged_newton_its(out_dir: &Path) -> Vec<u64> {
+    let s = summary(out_dir);
+    assert_eq!(s["converged"], true, "{}", out_dir.display());
+    s["steps"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|st| st["newton_its"].as_u64().unwrap())
+        .collect()
+}
+
 /// A metric from summary.json.
 pub fn metric(out_dir: &Path, name: &str) -> f64 {
     summary(out_dir)["metrics"][name]
