@@ -113,6 +113,8 @@ pub struct Scene {
     pub body_forces: Vec<BodyForce>,
     /// Sets whose reactions are reported, with their constrained dofs.
     pub reaction_sets: BTreeMap<String, Vec<usize>>,
+    /// Element quadrature degree, if the scene overrides the per-type default.
+    pub quadrature_degree: Option<usize>,
     pub steps: usize,
     pub max_cuts: usize,
     pub newton: crate::io::case_file::NewtonSpec,
@@ -322,6 +324,11 @@ impl Scene {
             None => None,
             Some(v) => Some(build_verification(v).map_err(err)?),
         };
+        if let Some(q) = file.quadrature_degree {
+            if !(1..=10).contains(&q) {
+                return Err(err(format!("quadrature_degree = {q}: must be in 1..=10")));
+            }
+        }
         let constraints = by_dof.into_values().collect();
         Ok(Scene {
             name,
@@ -334,6 +341,7 @@ impl Scene {
             pressures,
             body_forces,
             reaction_sets,
+            quadrature_degree: file.quadrature_degree,
             steps: file.steps.count,
             max_cuts: file.steps.max_cuts,
             newton: file.newton.clone(),

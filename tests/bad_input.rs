@@ -398,6 +398,11 @@ value = [0.0, 0.0, -1.0]
         ),
         // --- Steps, Newton, verification.
         check(
+            "quadrature_degree_zero",
+            valid_top("quadrature_degree = 0\n"),
+            "quadrature_degree",
+        ),
+        check(
             "steps_count_zero",
             valid_plus("[steps]\ncount = 0\n"),
             "steps.count",

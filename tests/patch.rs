@@ -64,6 +64,19 @@ fn linear_elastic_patch_every_element_distorted() {
     }
 }
 
+/// A selected quadrature degree (here a richer rule than the default) keeps the patch exact.
+#[test]
+fn patch_holds_with_a_selected_quadrature_degree() {
+    let toml = format!(
+        "quadrature_degree = 7\n{}",
+        patch_case("hex27", "linear_elastic", G)
+    );
+    let case = common::write_case("patch_hex27_q7", &toml);
+    let (out, _) = common::run_case(&case, 1, &["-q"]);
+    assert!(common::metric(&out, "max_displacement_error") < 1e-10);
+    assert!(common::metric(&out, "max_stress_error") < 1e-10);
+}
+
 #[test]
 fn neo_hookean_patch_every_element_distorted() {
     for el in ["hex8", "hex20", "hex27", "tet4", "tet10"] {

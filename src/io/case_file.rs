@@ -50,6 +50,10 @@ pub struct CaseFile {
     /// PETSc options file (relative to the case file), read before the command line so command
     /// line options win. Optional.
     pub petsc_options: Option<String>,
+    /// Degree of polynomials the element quadrature integrates exactly (1..=10), for every
+    /// element. Default per type: Hex8 3 (2x2x2 Gauss), Hex20 and Hex27 5 (3x3x3), Tet4 2,
+    /// Tet10 4.
+    pub quadrature_degree: Option<usize>,
     /// Mesh parts, merged in order into one mesh. At least one.
     pub mesh: Vec<MeshPart>,
     /// One material per body.

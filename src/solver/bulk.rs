@@ -49,9 +49,13 @@ impl Bulk {
         let mut elements = Vec::with_capacity(dofs.local_elements.len());
         for &e in &dofs.local_elements {
             let kind = mesh.types[e];
-            let rule = rules
-                .entry(kind)
-                .or_insert_with(|| kind.quadrature(kind.default_quadrature_degree()));
+            let rule = rules.entry(kind).or_insert_with(|| {
+                kind.quadrature(
+                    scene
+                        .quadrature_degree
+                        .unwrap_or(kind.default_quadrature_degree()),
+                )
+            });
             let geom =
                 ElementGeometry::new(kind, rule, &mesh.element_coords(e)).map_err(|inv| {
                     Error::Mesh(format!(
