@@ -36,15 +36,35 @@ pub enum Error {
         location: &'static std::panic::Location<'static>,
         msg: String,
     },
+    /// An invalid PETSc option (the same on every rank).
+    #[error("PETSc options ({source_name}): {msg}")]
+    Options { source_name: String, msg: String },
     /// A physical failure inside a solve (inverted element, NaN, diverged Newton).
     #[error("solve: {0}")]
     Solve(String),
+    /// An error already reported by another rank (or by this one): exit 1, print nothing.
+    #[error("(reported)")]
+    Reported,
     /// Anything else with a clear message.
     #[error("{0}")]
     Other(String),
 }
 
 impl Error {
+    /// True for errors every rank meets at the same point (the same input, the same collective
+    /// solver outcome): reported once by rank 0, and every rank ends normally. Any other error
+    /// may be one rank's alone, while the others wait in a collective call.
+    pub fn is_collective(&self) -> bool {
+        matches!(
+            self,
+            Error::Case { .. }
+                | Error::Mesh(_)
+                | Error::Gmsh { .. }
+                | Error::Options { .. }
+                | Error::Solve(_)
+        )
+    }
+
     /// An I/O error on `path`.
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Error {
         Error::Io {

@@ -14,6 +14,8 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use mpi::collective::{CommunicatorCollectives, SystemOperation};
+use mpi::topology::{Communicator, SimpleCommunicator};
 
 use mortar::case::Scene;
 use mortar::petsc::Petsc;
@@ -78,6 +80,7 @@ fn main() -> ExitCode {
     };
     match execute(cli, program) {
         Ok(()) => ExitCode::SUCCESS,
+        Err(Error::Reported) => ExitCode::FAILURE,
         Err(e) => {
             eprintln!("mortar: error: {e}");
             ExitCode::FAILURE
@@ -142,23 +145,92 @@ fn execute(cli: Cli, program: String) -> Result<()> {
             out,
             quiet,
             petsc,
-        } => {
-            // Every rank reads the case; all ranks fail alike on bad input.
-            let scene = Scene::load(&case)?;
-            let mut petsc_args = vec![program];
-            petsc_args.extend(petsc);
-            let petsc = Petsc::initialize(&petsc_args, scene.petsc_options.as_deref())?;
-            let out_dir = out.unwrap_or_else(|| default_out(&scene.name));
-            let result = run(&scene, &petsc, &RunOptions { out_dir, quiet });
-            if let Err(e) = &result {
-                // Only one line per failure: other ranks stay quiet unless the error is theirs.
-                if petsc.rank() != 0 && !matches!(e, Error::Petsc { .. }) {
-                    drop(petsc);
-                    std::process::exit(1);
-                }
+        } => run_command(&case, out, quiet, program, petsc),
+    }
+}
+
+/// `mortar run` under MPI, with the error policy of a parallel program:
+///
+/// - MPI starts first, then every rank reads the case, and the ranks agree (one allreduce) on
+///   whether all succeeded; only the first failing rank prints, and every rank exits 1.
+/// - An error every rank meets alike ([`Error::is_collective`]: non-convergence, a bad option)
+///   is printed once, by rank 0, and every rank ends normally.
+/// - Any other error may be one rank's alone while the others wait in a collective call: that
+///   rank prints it with its rank and aborts the job (`MPI_Abort`), so a run never hangs.
+fn run_command(
+    case: &Path,
+    out: Option<PathBuf>,
+    quiet: bool,
+    program: String,
+    petsc_options: Vec<String>,
+) -> Result<()> {
+    let universe = mortar::petsc::start_mpi()?;
+    let world = universe.world();
+    let (rank, size) = (world.rank(), world.size());
+    let loaded = Scene::load(case);
+    let first_failure = first_failing_rank(&world, loaded.is_err());
+    let scene = match loaded {
+        Ok(s) if first_failure == size => s,
+        Ok(_) => return Err(Error::Reported),
+        Err(e) if rank == first_failure => return Err(ranked(e, rank, size)),
+        Err(_) => return Err(Error::Reported),
+    };
+    let mut petsc_args = vec![program];
+    petsc_args.extend(petsc_options);
+    let petsc = match Petsc::start(universe, &petsc_args, scene.petsc_options.as_deref()) {
+        Ok(p) => p,
+        Err(e) => return Err(abort_unless_collective(&world, e, rank, size)),
+    };
+    let out_dir = out.unwrap_or_else(|| default_out(&scene.name));
+    match run(&scene, &petsc, &RunOptions { out_dir, quiet }) {
+        Ok(_) => {
+            if rank == 0 {
+                warn_unused_options(&petsc);
             }
-            result.map(|_| ())
+            Ok(())
         }
+        Err(e) => Err(abort_unless_collective(&world, e, rank, size)),
+    }
+}
+
+/// The lowest rank for which `failed` holds, or the number of ranks if none.
+fn first_failing_rank(world: &SimpleCommunicator, failed: bool) -> i32 {
+    let mine = if failed { world.rank() } else { world.size() };
+    let mut first = 0;
+    world.all_reduce_into(&mine, &mut first, SystemOperation::min());
+    first
+}
+
+/// A collective error is returned for rank 0 to print (others stay quiet); any other error is
+/// printed with its rank and the job is aborted.
+fn abort_unless_collective(world: &SimpleCommunicator, e: Error, rank: i32, size: i32) -> Error {
+    if e.is_collective() {
+        return if rank == 0 { e } else { Error::Reported };
+    }
+    if size == 1 {
+        return e;
+    }
+    eprintln!("mortar: error: [rank {rank}] {e}");
+    world.abort(1)
+}
+
+/// Prefixes the rank to an error when the job has several.
+fn ranked(e: Error, rank: i32, size: i32) -> Error {
+    if size > 1 && rank != 0 {
+        Error::Other(format!("[rank {rank}] {e}"))
+    } else {
+        e
+    }
+}
+
+fn warn_unused_options(petsc: &Petsc) {
+    match petsc.unused_options() {
+        Ok(0) => {}
+        Ok(n) => eprintln!(
+            "mortar: warning: {n} PETSc option(s) were never used (a typo?); \
+             rerun with -options_left to list them"
+        ),
+        Err(e) => eprintln!("mortar: warning: {e}"),
     }
 }
 

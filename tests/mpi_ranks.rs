@@ -34,3 +34,67 @@ fn compressed_block_one_and_two_ranks_agree() {
         common::max_rel_difference(&common::displacements(&out1), &common::displacements(&out2));
     assert!(d < 1e-10, "1 vs 2 ranks: max relative difference {d:e}");
 }
+
+/// The `mortar: error:` lines in a run's stderr (mpirun adds its own banners around them).
+fn error_lines(out: &std::process::Output) -> Vec<String> {
+    String::from_utf8_lossy(&out.stderr)
+        .lines()
+        .filter(|l| l.starts_with("mortar: error:"))
+        .map(String::from)
+        .collect()
+}
+
+/// Bad input, a bad PETSc option and a failed solve on 2 ranks: one error line, exit non-zero,
+/// and no hang (mpirun's --timeout would give exit code 110).
+#[test]
+fn collective_failures_on_two_ranks_report_once() {
+    let sphere = common::thick_sphere_case("hex8", 1);
+    let bad_case = sphere.replace("young = 1000.0", "young = -1.0");
+    let failing = common::compressed_block("hex8", 0.6, 1)
+        .replace("[steps]\ncount = 1", "[steps]\ncount = 1\nmax_cuts = 0");
+    let runs: [(&str, String, &[&str], &str); 3] = [
+        ("two_rank_bad_case", bad_case, &["-q"], "young"),
+        (
+            "two_rank_bad_option",
+            sphere,
+            &["-q", "-ksp_type", "nonsense"],
+            "nonsense",
+        ),
+        (
+            "two_rank_failed_solve",
+            failing,
+            &["-q"],
+            "did not converge",
+        ),
+    ];
+    for (name, toml, args, culprit) in runs {
+        let case = common::write_case(name, &toml);
+        let out_dir = case.parent().unwrap().join("out");
+        let out = common::run_raw(&case, 2, &out_dir, args);
+        assert_ne!(out.status.code(), Some(0), "{name}");
+        assert_ne!(out.status.code(), Some(110), "{name}: timed out");
+        let lines = error_lines(&out);
+        assert_eq!(lines.len(), 1, "{name}: {lines:?}");
+        assert!(lines[0].contains(culprit), "{name}: {}", lines[0]);
+    }
+}
+
+/// An error on one rank only (its VTU path is a directory) aborts the job at once, naming the
+/// rank, instead of leaving the other rank waiting in a collective call.
+#[test]
+fn a_rank_local_failure_aborts_instead_of_hanging() {
+    let case = common::write_case(
+        "two_rank_local_error",
+        &common::thick_sphere_case("hex8", 2),
+    );
+    let out_dir = case.parent().unwrap().join("out");
+    std::fs::create_dir_all(out_dir.join("vtu/thick_sphere_0001_r1.vtu/blocker")).unwrap();
+    let t = std::time::Instant::now();
+    let out = common::run_raw(&case, 2, &out_dir, &["-q"]);
+    assert_ne!(out.status.code(), Some(0));
+    assert_ne!(out.status.code(), Some(110), "timed out");
+    assert!(t.elapsed().as_secs() < 60);
+    let lines = error_lines(&out);
+    assert_eq!(lines.len(), 1, "{lines:?}");
+    assert!(lines[0].contains("[rank 1]"), "{}", lines[0]);
+}

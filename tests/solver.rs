@@ -54,6 +54,23 @@ fn reactions_balance_body_force_and_pressure() {
     assert!(rx.abs() < 1e-10, "reaction x {rx}");
 }
 
+/// Lamé sphere: the reaction on the symmetry plane x = 0 balances the hoop stress across it,
+/// R_x = -int_a^b sigma_tt (pi / 2) r dr = -pi / 4 for a = 1, b = 2, p = 1 (tension: the plane
+/// pulls). Hex20, n = 2: within 1e-4 relative (discretization error).
+#[test]
+fn sphere_symmetry_reaction_is_minus_pi_over_four() {
+    let case = common::write_case("sphere_reaction", &common::thick_sphere_case("hex20", 2));
+    let (out, _) = common::run_case(&case, 1, &["-q"]);
+    let exact = -std::f64::consts::FRAC_PI_4;
+    for (set, c) in [("symx", "x"), ("symy", "y"), ("symz", "z")] {
+        let r = reaction(&out, &format!("reaction_sphere.{set}_{c}"));
+        assert!(
+            (r - exact).abs() < 1e-4 * exact.abs(),
+            "{set}: {r} vs {exact}"
+        );
+    }
+}
+
 /// A block compressed 60 % in one step inverts its top elements on the first Newton iterate:
 /// the step is cut (reported), and the halved steps converge.
 #[test]
@@ -92,6 +109,12 @@ fn a_step_that_cannot_be_cut_fails_clearly() {
     let s = common::summary(&out_dir);
     assert_eq!(s["converged"], false);
     assert!(s["message"].as_str().unwrap().contains("inverted"));
+    // Outputs describe the last converged state (here the initial one), not the failed iterate.
+    let u_max = common::displacements(&out_dir)
+        .iter()
+        .flat_map(|r| r[3..].iter().map(|v| v.abs()))
+        .fold(0.0, f64::max);
+    assert_eq!(u_max, 0.0);
 }
 
 /// `-log_view` shows the solver's phases as PETSc log stages.

@@ -18,14 +18,28 @@ pub struct Petsc {
     universe: mpi::environment::Universe,
 }
 
+/// Initializes MPI (once per process).
+pub fn start_mpi() -> Result<mpi::environment::Universe> {
+    mpi::initialize()
+        .ok_or_else(|| Error::Other("MPI was already initialized in this process".into()))
+}
+
 impl Petsc {
-    /// Initializes MPI and PETSc. `args` is the program name followed by the PETSc options;
-    /// `options_file` (the scene's options) is read by PETSc before the command line, so command
-    /// line options win.
+    /// Initializes MPI, then PETSc: [`start_mpi`] followed by [`Petsc::start`].
     pub fn initialize(args: &[String], options_file: Option<&Path>) -> Result<Petsc> {
+        Petsc::start(start_mpi()?, args, options_file)
+    }
+
+    /// Initializes PETSc on an MPI already started by [`start_mpi`] (so a program can learn its
+    /// rank, e.g. to report input errors once, before PETSc starts). `args` is the program name
+    /// followed by the PETSc options; `options_file` (the scene's options) is read by PETSc
+    /// before the command line, so command line options win.
+    pub fn start(
+        universe: mpi::environment::Universe,
+        args: &[String],
+        options_file: Option<&Path>,
+    ) -> Result<Petsc> {
         check_sizes()?;
-        let universe = mpi::initialize()
-            .ok_or_else(|| Error::Other("MPI was already initialized in this process".into()))?;
         let c_args: Vec<CString> = args
             .iter()
             .map(|a| {
@@ -52,8 +66,13 @@ impl Petsc {
             None => None,
         };
         let file_ptr = file.as_ref().map_or(std::ptr::null(), |c| c.as_ptr());
-        // The error handler must be in place before PetscInitialize reads the options file, but
-        // PETSc resets handlers during initialization, so push it right after as well.
+        // The handler goes in before PetscInitialize (so an error reading the options file is
+        // captured, not printed as a traceback) and again after it, in case initialization
+        // reset the handler stack.
+        chk!(PetscPushErrorHandler(
+            Some(super::error::capture_error),
+            std::ptr::null_mut()
+        ))?;
         chk!(PetscInitialize(
             &mut argc,
             &mut argv_ptr,
@@ -64,6 +83,7 @@ impl Petsc {
             Some(super::error::capture_error),
             std::ptr::null_mut()
         ))?;
+        check_library_sizes()?;
         Ok(Petsc {
             _args: c_args,
             _argv: argv,
@@ -74,6 +94,14 @@ impl Petsc {
     /// The world communicator of rsmpi.
     pub fn world(&self) -> mpi::topology::SimpleCommunicator {
         self.universe.world()
+    }
+
+    /// Options set on the command line or in the options file that no PETSc object ever read,
+    /// usually typos (`-snes_monitr`); `-options_left` lists them.
+    pub fn unused_options(&self) -> Result<usize> {
+        let mut n: p::PetscInt = 0;
+        chk!(PetscOptionsAllUsed(std::ptr::null_mut(), &mut n))?;
+        Ok(n.max(0) as usize)
     }
 
     /// This process's rank.
@@ -100,7 +128,27 @@ impl Drop for Petsc {
     }
 }
 
-/// Asserts that PETSc was compiled with the index and scalar sizes the bindings assume.
+/// Asserts that the PETSc *library* in use (not only its headers) has the index and scalar sizes
+/// the bindings assume, asking it at run time.
+fn check_library_sizes() -> Result<()> {
+    let (mut int, mut scalar) = (0usize, 0usize);
+    chk!(PetscDataTypeGetSize(p::PetscDataType::PETSC_INT, &mut int))?;
+    chk!(PetscDataTypeGetSize(
+        p::PetscDataType::PETSC_DOUBLE,
+        &mut scalar
+    ))?;
+    if int != std::mem::size_of::<p::PetscInt>() || scalar != std::mem::size_of::<f64>() {
+        return Err(Error::Other(format!(
+            "PETSc library mismatch: PetscInt {int} bytes and PetscReal {scalar} bytes at run time; \
+             the bindings assume {} and 8",
+            std::mem::size_of::<p::PetscInt>()
+        )));
+    }
+    Ok(())
+}
+
+/// Asserts that the headers the bindings (and the shim) were compiled against have the index
+/// and scalar sizes the bindings assume.
 fn check_sizes() -> Result<()> {
     // SAFETY: plain functions returning sizeof values.
     let (int, scalar, real) = unsafe {

@@ -48,6 +48,7 @@ impl Matrix {
     /// A square AIJ matrix over the world communicator with `sparsity.rows.len()` owned rows and
     /// columns, preallocated exactly; new nonzeros are an error.
     pub fn new_aij(sparsity: &Sparsity) -> Result<Matrix> {
+        super::ensure_initialized()?;
         let n = to_petsc_int(sparsity.rows.len())?;
         let (d_nnz, o_nnz) = sparsity.nnz();
         let mut raw: p::Mat = std::ptr::null_mut();
@@ -95,8 +96,15 @@ impl Matrix {
     /// Adds a dense block (row-major, `rows.len() x cols.len()`) at global indices; negative
     /// indices are ignored (constrained dofs). Rows owned by other ranks are communicated at
     /// [`Matrix::assemble`].
+    ///
+    /// # Panics
+    /// If `vals` does not hold `rows.len() * cols.len()` entries.
     pub fn add_values(&mut self, rows: &[PetscInt], cols: &[PetscInt], vals: &[f64]) -> Result<()> {
-        debug_assert_eq!(rows.len() * cols.len(), vals.len());
+        assert_eq!(
+            rows.len() * cols.len(),
+            vals.len(),
+            "Matrix::add_values: wrong block size"
+        );
         chk!(MatSetValues(
             self.raw,
             to_petsc_int(rows.len())?,
@@ -123,6 +131,7 @@ impl Matrix {
     /// Values of owned entries `(row, col)` (for tests and diagnostics).
     pub fn get_values(&self, rows: &[PetscInt], cols: &[PetscInt]) -> Result<Vec<f64>> {
         let mut vals = vec![0.0; rows.len() * cols.len()];
+        assert!(vals.len() == rows.len() * cols.len());
         chk!(MatGetValues(
             self.raw,
             to_petsc_int(rows.len())?,
@@ -142,6 +151,9 @@ impl Matrix {
 
 impl Drop for Matrix {
     fn drop(&mut self) {
+        if super::is_finalized() {
+            return;
+        }
         // SAFETY: `raw` is a valid Mat we hold a reference to.
         let code = unsafe { p::MatDestroy(&mut self.raw) };
         if code != 0 {

@@ -23,7 +23,7 @@ pub mod snes;
 mod vector;
 
 pub use error::check;
-pub use init::Petsc;
+pub use init::{start_mpi, Petsc};
 pub use matrix::{Matrix, Sparsity};
 pub use scatter::Scatter;
 pub use snes::{CallbackError, Snes, SnesOutcome};
@@ -52,6 +52,27 @@ pub fn to_petsc_int(n: usize) -> crate::Result<PetscInt> {
             "index {n} exceeds PetscInt (32-bit in this PETSc build)"
         ))
     })
+}
+
+/// Fails unless PETSc is initialized (and not yet finalized): every constructor calls this, so
+/// no PETSc object can be made outside the life of the [`Petsc`] guard.
+pub(crate) fn ensure_initialized() -> crate::Result<()> {
+    let mut init = petsc_ffi::PetscBool::PETSC_FALSE;
+    chk!(PetscInitialized(&mut init))?;
+    if init != petsc_ffi::PetscBool::PETSC_TRUE || is_finalized() {
+        return Err(crate::Error::Other(
+            "PETSc object created outside the life of the Petsc guard".into(),
+        ));
+    }
+    Ok(())
+}
+
+/// True once `PetscFinalize` has run: `Drop` impls then leave their (already freed) objects alone.
+pub(crate) fn is_finalized() -> bool {
+    let mut fin = petsc_ffi::PetscBool::PETSC_FALSE;
+    // SAFETY: PetscFinalized only writes the flag; it is valid before and after init.
+    unsafe { petsc_ffi::PetscFinalized(&mut fin) };
+    fin == petsc_ffi::PetscBool::PETSC_TRUE
 }
 
 /// The world communicator as PETSc sees it.

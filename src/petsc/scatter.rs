@@ -51,6 +51,9 @@ impl Scatter {
 
 impl Drop for Scatter {
     fn drop(&mut self) {
+        if super::is_finalized() {
+            return;
+        }
         // SAFETY: `raw` is a valid VecScatter owned by this struct.
         let code = unsafe { p::VecScatterDestroy(&mut self.raw) };
         if code != 0 {

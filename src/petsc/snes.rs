@@ -95,6 +95,7 @@ impl Snes {
     /// A Newton solver with the project's defaults, then `SNESSetFromOptions`. `options_source`
     /// names where the options came from, for the error message when one is invalid.
     pub fn new(tol: Tolerances, options_source: &str) -> Result<Snes> {
+        super::ensure_initialized()?;
         let mut raw: p::SNES = std::ptr::null_mut();
         chk!(SNESCreate(super::comm_world(), &mut raw))?;
         let snes = Snes {
@@ -105,13 +106,11 @@ impl Snes {
         let mut ls: p::SNESLineSearch = std::ptr::null_mut();
         chk!(SNESGetLineSearch(snes.raw, &mut ls))?;
         chk!(SNESLineSearchSetType(ls, c"basic".as_ptr()))?;
-        let mut ksp: p::KSP = std::ptr::null_mut();
-        chk!(SNESGetKSP(snes.raw, &mut ksp))?;
-        chk!(KSPSetType(ksp, c"preonly".as_ptr()))?;
-        let mut pc: p::PC = std::ptr::null_mut();
-        chk!(KSPGetPC(ksp, &mut pc))?;
-        chk!(PCSetType(pc, c"lu".as_ptr()))?;
-        chk!(PCFactorSetMatSolverType(pc, c"mumps".as_ptr()))?;
+        chk!(SNESSetCheckJacobianDomainError(
+            snes.raw,
+            p::PetscBool::PETSC_TRUE
+        ))?;
+        set_linear_solver_defaults()?;
         chk!(SNESSetTolerances(
             snes.raw,
             tol.atol,
@@ -121,9 +120,10 @@ impl Snes {
             -1
         ))?;
         chk!(SNESSetFromOptions(snes.raw)).map_err(|e| match e {
-            Error::Petsc { msg, .. } => {
-                Error::Other(format!("PETSc options ({options_source}): {msg}"))
-            }
+            Error::Petsc { msg, .. } => Error::Options {
+                source_name: options_source.to_string(),
+                msg,
+            },
             other => other,
         })?;
         let mut max_it: PetscInt = 0;
@@ -234,12 +234,31 @@ impl Snes {
 
 impl Drop for Snes {
     fn drop(&mut self) {
+        if super::is_finalized() {
+            return;
+        }
         // SAFETY: `raw` is a valid SNES owned by this struct.
         let code = unsafe { p::SNESDestroy(&mut self.raw) };
         if code != 0 {
             eprintln!("warning: SNESDestroy returned error code {code}");
         }
     }
+}
+
+/// The default linear solver, as option defaults so that any user choice replaces it whole:
+/// with neither `-ksp_type` nor `-pc_type` given, a direct solve (`preonly`, `lu`, MUMPS); with
+/// only `-pc_type`, GMRES around it; with only `-ksp_type`, LU through MUMPS inside it.
+fn set_linear_solver_defaults() -> Result<()> {
+    use super::options::{has, set_default};
+    let (ksp, pc) = (has("-ksp_type")?, has("-pc_type")?);
+    if !pc {
+        set_default("-pc_type", "lu")?;
+        set_default("-pc_factor_mat_solver_type", "mumps")?;
+    }
+    if !ksp {
+        set_default("-ksp_type", if pc { "gmres" } else { "preonly" })?;
+    }
+    Ok(())
 }
 
 /// Runs a callback body with panics caught; maps the outcome to a PETSc error code.

@@ -13,6 +13,7 @@ pub struct Vector {
 impl Vector {
     /// A distributed (MPI) vector with `local` entries on this rank.
     pub fn new_mpi(local: usize) -> Result<Vector> {
+        super::ensure_initialized()?;
         let mut raw: p::Vec = std::ptr::null_mut();
         chk!(VecCreateMPI(
             super::comm_world(),
@@ -25,6 +26,7 @@ impl Vector {
 
     /// A sequential vector of length `n` on this rank only.
     pub fn new_seq(n: usize) -> Result<Vector> {
+        super::ensure_initialized()?;
         let mut raw: p::Vec = std::ptr::null_mut();
         chk!(VecCreateSeq(super::comm_self(), to_petsc_int(n)?, &mut raw))?;
         Ok(Vector { raw })
@@ -72,8 +74,11 @@ impl Vector {
 
     /// Adds (or inserts) values at global indices; negative indices (constrained dofs) are
     /// skipped. Call [`Vector::assemble`] afterwards.
+    ///
+    /// # Panics
+    /// If `idx` and `vals` differ in length (PETSc would read past `vals`).
     pub fn set_values(&mut self, idx: &[PetscInt], vals: &[f64], add: bool) -> Result<()> {
-        debug_assert_eq!(idx.len(), vals.len());
+        assert_eq!(idx.len(), vals.len(), "Vector::set_values: lengths differ");
         if idx.iter().any(|&i| i < 0) {
             // Vectors ignore negative indices only with VEC_IGNORE_NEGATIVE_INDICES, which
             // SNES's work vectors need not carry: filter here instead.
@@ -163,6 +168,9 @@ unsafe fn slice_or_empty<'a>(ptr: *const f64, n: usize) -> &'a [f64] {
 
 impl Drop for Vector {
     fn drop(&mut self) {
+        if super::is_finalized() {
+            return;
+        }
         // SAFETY: `raw` is a valid Vec we hold a reference to. An error cannot be returned from
         // Drop; report it rather than swallow it.
         let code = unsafe { p::VecDestroy(&mut self.raw) };

@@ -4,8 +4,9 @@
 //! SNES solve of `F(u; t) = 0` from the previous converged state. A solve that does not converge
 //! (diverged Newton, line-search failure, an inverted element reported as a domain error, NaN) is
 //! **cut**: the state is restored and the increment halved, at most `steps.max_cuts` times in a
-//! row; after a converged cut increment the step size doubles back toward the nominal one. Every
-//! cut is reported on rank 0 and counted in the history and summary.
+//! row and never below `1 / (steps.count 2^max_cuts)`; after a converged cut increment the step
+//! size doubles back toward the nominal one. Every cut is reported on rank 0 and counted in the
+//! history and summary. When a run fails, every output describes the last converged step.
 //!
 //! After each converged step: reactions on the constrained sets (summed over ranks), one VTU
 //! file per rank, the PVTU and PVD written by rank 0 once all pieces exist, and a history row.
@@ -119,169 +120,190 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         scene.steps
     ));
 
-    let mut summary = Summary {
-        case: scene.name.clone(),
-        ranks,
-        converged: false,
-        ..Default::default()
-    };
-    let dt_nominal = 1.0 / scene.steps as f64;
-    let (mut t, mut dt, mut cuts_in_row, mut step) = (0.0f64, dt_nominal, 0usize, 0usize);
-    let mut x_prev = x.duplicate()?;
-    while t < 1.0 - 1e-12 {
-        let t_new = if t + dt > 1.0 - 1e-9 { 1.0 } else { t + dt };
-        x.copy_to(&mut x_prev)?;
-        state.borrow_mut().t = t_new;
-        state.borrow_mut().assembly_seconds = 0.0;
-        let t_solve = Instant::now();
-        let assembly_stage = phases.stage("assembly");
-        let solve_guard = phases.push("solve")?;
-        let outcome = {
-            let mut residual = |xv: &Vector, f: &mut Vector| -> Result<(), CallbackError> {
-                let _stage = assembly_stage.map(|st| st.push()).transpose()?;
-                let mut s = state.borrow_mut();
-                let t0 = Instant::now();
-                s.load(scene, &dofs, xv)?;
-                let inv = bulk.residual(scene, &dofs, &s.u, s.t, f)?;
-                s.assembly_seconds += t0.elapsed().as_secs_f64();
-                collective_domain_check(&world, inv)
-            };
-            let mut jacobian = |xv: &Vector, j: &mut Matrix| -> Result<(), CallbackError> {
-                let _stage = assembly_stage.map(|st| st.push()).transpose()?;
-                let mut s = state.borrow_mut();
-                let t0 = Instant::now();
-                s.load(scene, &dofs, xv)?;
-                let inv = bulk.jacobian(scene, &dofs, &s.u, s.t, j)?;
-                s.assembly_seconds += t0.elapsed().as_secs_f64();
-                collective_domain_check(&world, inv)
-            };
-            snes.solve(&mut x, &mut jac, &mut residual, &mut jacobian)?
+    // Everything from here may fail on one rank only (I/O, say) while the others wait in a
+    // collective call; such an error aborts the job *here*, while the PETSc objects are alive:
+    // destroying them (MUMPS in particular) is itself collective and would hang.
+    let stepping = (|| -> Result<Summary> {
+        let mut summary = Summary {
+            case: scene.name.clone(),
+            ranks,
+            converged: false,
+            ..Default::default()
         };
-        drop(solve_guard);
-        let assembly = state.borrow().assembly_seconds;
-        let solve_seconds = t_solve.elapsed().as_secs_f64();
-        phases.add("assembly", assembly);
-        phases.add("solve", (solve_seconds - assembly).max(0.0));
-        if !outcome.converged {
-            cuts_in_row += 1;
-            let why = outcome
-                .domain_error
-                .clone()
-                .unwrap_or_else(|| outcome.reason.to_string());
-            x_prev.copy_to(&mut x)?;
-            let giving_up = cuts_in_row > scene.max_cuts;
-            say(format!(
-                "  step {} load {t_new:.6}: not converged ({why}) after {} Newton its; {}",
-                step + 1,
-                outcome.iterations,
-                if giving_up {
-                    format!("no cuts left ({} allowed)", scene.max_cuts)
-                } else {
-                    format!("cut {cuts_in_row}/{}", scene.max_cuts)
-                }
-            ));
-            if giving_up {
-                summary.message = Some(format!(
-                    "step {} (load {t_new}) did not converge after {} cuts: {why}",
+        let dt_nominal = 1.0 / scene.steps as f64;
+        let dt_min = dt_nominal * 0.5f64.powi(scene.max_cuts as i32) * (1.0 - 1e-12);
+        let (mut t, mut dt, mut cuts_in_row, mut step) = (0.0f64, dt_nominal, 0usize, 0usize);
+        let mut x_prev = x.duplicate()?;
+        while t < 1.0 - 1e-12 {
+            let t_new = if t + dt > 1.0 - 1e-9 { 1.0 } else { t + dt };
+            x.copy_to(&mut x_prev)?;
+            state.borrow_mut().t = t_new;
+            state.borrow_mut().assembly_seconds = 0.0;
+            let t_solve = Instant::now();
+            let assembly_stage = phases.stage("assembly");
+            let solve_guard = phases.push("solve")?;
+            let outcome = {
+                let mut residual = |xv: &Vector, f: &mut Vector| -> Result<(), CallbackError> {
+                    let _stage = assembly_stage.map(|st| st.push()).transpose()?;
+                    let mut s = state.borrow_mut();
+                    let t0 = Instant::now();
+                    s.load(scene, &dofs, xv)?;
+                    let inv = bulk.residual(scene, &dofs, &s.u, s.t, f)?;
+                    s.assembly_seconds += t0.elapsed().as_secs_f64();
+                    collective_domain_check(&world, inv)
+                };
+                let mut jacobian = |xv: &Vector, j: &mut Matrix| -> Result<(), CallbackError> {
+                    let _stage = assembly_stage.map(|st| st.push()).transpose()?;
+                    let mut s = state.borrow_mut();
+                    let t0 = Instant::now();
+                    s.load(scene, &dofs, xv)?;
+                    let inv = bulk.jacobian(scene, &dofs, &s.u, s.t, j)?;
+                    s.assembly_seconds += t0.elapsed().as_secs_f64();
+                    collective_domain_check(&world, inv)
+                };
+                snes.solve(&mut x, &mut jac, &mut residual, &mut jacobian)?
+            };
+            drop(solve_guard);
+            let assembly = state.borrow().assembly_seconds;
+            let solve_seconds = t_solve.elapsed().as_secs_f64();
+            phases.add("assembly", assembly);
+            phases.add("solve", (solve_seconds - assembly).max(0.0));
+            if !outcome.converged {
+                cuts_in_row += 1;
+                let why = outcome
+                    .domain_error
+                    .clone()
+                    .unwrap_or_else(|| outcome.reason.to_string());
+                x_prev.copy_to(&mut x)?;
+                // Bounded in depth, not only in a row: fail/converge cycles cannot shrink the step
+                // below dt_nominal / 2^max_cuts.
+                let giving_up = cuts_in_row > scene.max_cuts || 0.5 * dt < dt_min;
+                say(format!(
+                    "  step {} load {t_new:.6}: not converged ({why}) after {} Newton its; {}",
                     step + 1,
-                    scene.max_cuts
+                    outcome.iterations,
+                    if giving_up {
+                        format!("no cuts left ({} allowed)", scene.max_cuts)
+                    } else {
+                        format!("cut {cuts_in_row}/{}", scene.max_cuts)
+                    }
                 ));
-                break;
+                if giving_up {
+                    summary.message = Some(format!(
+                        "step {} (load {t_new}) did not converge after {} cuts: {why}",
+                        step + 1,
+                        scene.max_cuts
+                    ));
+                    break;
+                }
+                dt *= 0.5;
+                continue;
             }
-            dt *= 0.5;
-            continue;
+            step += 1;
+            t = t_new;
+            let t_out = Instant::now();
+            let output_guard = phases.push("output")?;
+            state.borrow_mut().load(scene, &dofs, &x)?;
+            let s = state.borrow();
+            let reactions = results.reactions(scene, &dofs, &bulk, &s.u, t, &world)?;
+            let write_vtu = scene.vtu_every > 0 && (step % scene.vtu_every == 0 || t >= 1.0);
+            if write_vtu {
+                results.write_step(scene, &dofs, &bulk, &s.u, step, t, &world)?;
+            }
+            drop(s);
+            let final_res = outcome.residual_history.last().copied().unwrap_or(0.0);
+            results.push_history(
+                step,
+                t,
+                &outcome,
+                cuts_in_row,
+                final_res,
+                &reactions,
+                [
+                    assembly,
+                    (solve_seconds - assembly).max(0.0),
+                    t_out.elapsed().as_secs_f64(),
+                ],
+            )?;
+            summary.steps.push(StepRecord {
+                step,
+                load: t,
+                newton_its: outcome.iterations,
+                cut: cuts_in_row,
+                converged: true,
+            });
+            drop(output_guard);
+            phases.add("output", t_out.elapsed().as_secs_f64());
+            say(format!(
+                "  step {step} load {t:.6}: {} Newton its, |F| {final_res:.3e}, {} linear its{}, {:.2} s",
+                outcome.iterations,
+                outcome.linear_iterations,
+                if cuts_in_row > 0 { format!(", after {cuts_in_row} cut(s)") } else { String::new() },
+                solve_seconds
+            ));
+            if rank == 0 {
+                summary.timings = phases
+                    .seconds()
+                    .iter()
+                    .map(|(k, v)| (k.to_string(), *v))
+                    .collect();
+                results.write_summary(&summary)?;
+            }
+            cuts_in_row = 0;
+            dt = (2.0 * dt).min(dt_nominal);
         }
-        step += 1;
-        t = t_new;
-        let t_out = Instant::now();
-        let output_guard = phases.push("output")?;
-        state.borrow_mut().load(scene, &dofs, &x)?;
+        summary.converged = t >= 1.0 - 1e-12;
+        // Results describe the last converged state (x was restored after a failed attempt).
+        {
+            let mut s = state.borrow_mut();
+            s.t = t;
+            s.load(scene, &dofs, &x)?;
+        }
         let s = state.borrow();
-        let reactions = results.reactions(scene, &dofs, &bulk, &s.u, t, &world)?;
-        let write_vtu = scene.vtu_every > 0 && (step % scene.vtu_every == 0 || t >= 1.0);
-        if write_vtu {
-            results.write_step(scene, &dofs, &bulk, &s.u, step, t, &world)?;
+        results.write_displacements(scene, &dofs, &s.u, &world)?;
+        for (k, v) in results.metrics(scene, &dofs, &bulk, &s.u, &world)? {
+            summary.metrics.insert(k, v);
         }
-        drop(s);
-        let final_res = outcome.residual_history.last().copied().unwrap_or(0.0);
-        results.push_history(
-            step,
-            t,
-            &outcome,
-            cuts_in_row,
-            final_res,
-            &reactions,
-            [
-                assembly,
-                (solve_seconds - assembly).max(0.0),
-                t_out.elapsed().as_secs_f64(),
-            ],
-        )?;
-        summary.steps.push(StepRecord {
-            step,
-            load: t,
-            newton_its: outcome.iterations,
-            cut: cuts_in_row,
-            converged: true,
-        });
-        drop(output_guard);
-        phases.add("output", t_out.elapsed().as_secs_f64());
-        say(format!(
-            "  step {step} load {t:.6}: {} Newton its, |F| {final_res:.3e}, {} linear its{}, {:.2} s",
-            outcome.iterations,
-            outcome.linear_iterations,
-            if cuts_in_row > 0 { format!(", after {cuts_in_row} cut(s)") } else { String::new() },
-            solve_seconds
-        ));
+        let newton: Vec<usize> = summary.steps.iter().map(|s| s.newton_its).collect();
+        summary.metrics.insert(
+            "max_newton_its".into(),
+            newton.iter().copied().max().unwrap_or(0) as f64,
+        );
+        summary.metrics.insert(
+            "total_newton_its".into(),
+            newton.iter().sum::<usize>() as f64,
+        );
+        summary
+            .metrics
+            .insert("free_dofs".into(), dofs.total_free as f64);
+        summary.timings = phases
+            .seconds()
+            .iter()
+            .map(|(k, v)| (k.to_string(), *v))
+            .collect();
         if rank == 0 {
-            summary.timings = phases
-                .seconds()
-                .iter()
-                .map(|(k, v)| (k.to_string(), *v))
-                .collect();
             results.write_summary(&summary)?;
         }
-        cuts_in_row = 0;
-        dt = (2.0 * dt).min(dt_nominal);
-    }
-    summary.converged = t >= 1.0 - 1e-12;
-    let s = state.borrow();
-    results.write_displacements(scene, &dofs, &s.u, &world)?;
-    for (k, v) in results.metrics(scene, &dofs, &bulk, &s.u, &world)? {
-        summary.metrics.insert(k, v);
-    }
-    let newton: Vec<usize> = summary.steps.iter().map(|s| s.newton_its).collect();
-    summary.metrics.insert(
-        "max_newton_its".into(),
-        newton.iter().copied().max().unwrap_or(0) as f64,
-    );
-    summary.metrics.insert(
-        "total_newton_its".into(),
-        newton.iter().sum::<usize>() as f64,
-    );
-    summary
-        .metrics
-        .insert("free_dofs".into(), dofs.total_free as f64);
-    summary.timings = phases
-        .seconds()
-        .iter()
-        .map(|(k, v)| (k.to_string(), *v))
-        .collect();
-    if rank == 0 {
-        results.write_summary(&summary)?;
-    }
-    say(format!(
-        "mortar: {} -> {}",
-        if summary.converged {
-            "converged"
-        } else {
-            "FAILED"
-        },
-        opts.out_dir.display()
-    ));
-    match &summary.message {
-        Some(m) if !summary.converged => Err(Error::Solve(m.clone())),
-        _ => Ok(summary),
+        say(format!(
+            "mortar: {} -> {}",
+            if summary.converged {
+                "converged"
+            } else {
+                "FAILED"
+            },
+            opts.out_dir.display()
+        ));
+        match &summary.message {
+            Some(m) if !summary.converged => Err(Error::Solve(m.clone())),
+            _ => Ok(summary),
+        }
+    })();
+    match stepping {
+        Err(e) if ranks > 1 && !e.is_collective() => {
+            eprintln!("mortar: error: [rank {rank}] {e}");
+            world.abort(1)
+        }
+        other => other,
     }
 }
 

@@ -84,7 +84,7 @@ impl History {
             .join(",");
         out.push('\n');
         for row in &self.rows {
-            let line: Vec<String> = row.iter().map(|v| format!("{v}")).collect();
+            let line: Vec<String> = row.iter().map(|&v| format_number(v)).collect();
             out.push_str(&line.join(","));
             out.push('\n');
         }
@@ -198,6 +198,16 @@ pub fn read_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>)> {
     Ok((columns, rows))
 }
 
+/// Integers as integers (`3`), everything else in scientific notation with the shortest digits
+/// that round-trip (`-5.551115123125783e-17`, `1.5e0`), so columns stay readable.
+fn format_number(v: f64) -> String {
+    if v.fract() == 0.0 && v.abs() < 1e15 && !(v == 0.0 && v.is_sign_negative()) {
+        format!("{}", v as i64)
+    } else {
+        format!("{v:e}")
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::test_util::Scratch;
@@ -234,7 +244,7 @@ mod tests {
             .lines()
             .nth(1)
             .unwrap()
-            .starts_with("1,0.1,"));
+            .starts_with("1,1e-1,"));
     }
 
     #[test]
