@@ -9,6 +9,12 @@ fn main() {
         .cargo_metadata(true)
         .probe("PETSc")
         .expect("pkg-config cannot find PETSc: run ci/setup (libpetsc-real-dev)");
+    if !petsc.version.starts_with("3.18") {
+        panic!(
+            "the bindings are written for PETSc 3.18 (Debian bookworm); pkg-config found {}",
+            petsc.version
+        );
+    }
     let ompi = pkg_config::Config::new()
         .cargo_metadata(false)
         .probe("ompi-c")

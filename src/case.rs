@@ -570,6 +570,7 @@ fn build_part(p: &MeshPart, i: usize, dir: &Path, err: &dyn Fn(String) -> Error)
             "{key}: {count:.0} hexahedra requested; at most {MAX_GENERATED_ELEMENTS}"
         )));
     }
+    check_keys_apply(p, &key).map_err(err)?;
     if p.generator != "gmsh" && p.file.is_some() {
         return Err(err(format!("{key}.file is only for generator \"gmsh\"")));
     }
@@ -637,6 +638,54 @@ fn build_part(p: &MeshPart, i: usize, dir: &Path, err: &dyn Fn(String) -> Error)
         distort_interior(&mut mesh, p.distort);
     }
     Ok(mesh)
+}
+
+/// Rejects keys that the part's generator does not use (they would be silently ignored).
+fn check_keys_apply(p: &MeshPart, key: &str) -> std::result::Result<(), String> {
+    let given: [(&str, bool); 13] = [
+        ("element", p.element.is_some()),
+        ("divisions", p.divisions.is_some()),
+        ("lo", p.lo.is_some()),
+        ("hi", p.hi.is_some()),
+        ("length", p.length.is_some()),
+        ("width", p.width.is_some()),
+        ("height", p.height.is_some()),
+        ("n_circ", p.n_circ.is_some()),
+        ("n_rad", p.n_rad.is_some()),
+        ("inner_radius", p.inner_radius.is_some()),
+        ("outer_radius", p.outer_radius.is_some()),
+        ("file", p.file.is_some()),
+        ("distort", p.distort != 0.0),
+    ];
+    let allowed: &[&str] = match p.generator.as_str() {
+        "box" => &["element", "divisions", "lo", "hi", "distort"],
+        "beam" => &[
+            "element",
+            "divisions",
+            "length",
+            "width",
+            "height",
+            "distort",
+        ],
+        "thick_sphere_octant" => &[
+            "element",
+            "n_circ",
+            "n_rad",
+            "inner_radius",
+            "outer_radius",
+            "distort",
+        ],
+        "gmsh" => &["file"],
+        _ => return Ok(()), // the unknown generator is reported by the caller
+    };
+    match given.iter().find(|(k, set)| *set && !allowed.contains(k)) {
+        Some((k, _)) => Err(format!(
+            "{key}.{k} does not apply to generator \"{}\" (it takes: {})",
+            p.generator,
+            allowed.join(", ")
+        )),
+        None => Ok(()),
+    }
 }
 
 /// Renames generated sets `s` to `<body>.s`.

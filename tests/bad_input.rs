@@ -398,6 +398,11 @@ value = [0.0, 0.0, -1.0]
         ),
         // --- Steps, Newton, verification.
         check(
+            "key_not_for_this_generator",
+            valid_with("divisions = [1, 1, 1]", "divisions = [1, 1, 1]\nn_circ = 3"),
+            "mesh[0].n_circ",
+        ),
+        check(
             "quadrature_degree_zero",
             valid_top("quadrature_degree = 0\n"),
             "quadrature_degree",

@@ -10,13 +10,14 @@
 //!   `SNESSolve` returns, with its payload, and the solver is usable afterwards;
 //! - an error returned by the Jacobian closure comes back as that error;
 //! - a domain error ends the solve with `DIVERGED_FUNCTION_DOMAIN` and carries the message;
+//! - a linear solve through the KSP wrapper;
 //! - a PETSc error (a nonzero outside the preallocated pattern) comes back as `Error::Petsc`
 //!   with PETSc's own message and the Rust call site.
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 use mortar::petsc::snes::Tolerances;
-use mortar::petsc::{CallbackError, Matrix, Petsc, Snes, Sparsity, Vector};
+use mortar::petsc::{CallbackError, Ksp, Matrix, Petsc, Snes, Sparsity, Vector};
 use mortar::Error;
 
 const N: usize = 4;
@@ -158,6 +159,22 @@ fn petsc_layer_boundary_behaviour() {
         other => panic!("expected a PETSc error, got {other:?}"),
     }
 
+    // 6. A linear solve through the KSP wrapper: diag(2 x) y = 1 with x = 2, so y = 1/4.
+    let mut b = Vector::new_mpi(N).unwrap();
+    b.set_all(1.0).unwrap();
+    let mut y = Vector::new_mpi(N).unwrap();
+    let mut ksp = Ksp::new().unwrap();
+    let mut a = Matrix::new_aij(&diagonal_pattern()).unwrap();
+    x.set_all(2.0).unwrap();
+    jacobian(&x, &mut a).unwrap();
+    let out = ksp.solve(&a, &b, &mut y).unwrap();
+    assert!(out.converged);
+    for (i, v) in y.to_local_vec().unwrap().iter().enumerate() {
+        assert!((v - 0.25).abs() < 1e-15, "y[{i}] = {v}");
+    }
+
+    drop(ksp);
+    drop(a);
     drop(snes);
     drop(jac);
     drop(x);

@@ -3,7 +3,8 @@
 //! - [`Petsc`] is the one initialization guard: rsmpi initializes MPI, then `PetscInitialize`
 //!   receives the real argv (so `-snes_monitor`, `-ksp_type ...` reach PETSc's options database)
 //!   and the scene's options file; dropping it calls `PetscFinalize`, then MPI is finalized.
-//! - Every PETSc object ([`Vector`], [`Matrix`], [`Scatter`], [`Snes`]) is destroyed in `Drop`.
+//! - Every PETSc object ([`Vector`], [`Matrix`], [`Scatter`], [`Ksp`], [`Snes`]) is destroyed in
+//!   `Drop`, and none can be created outside the life of the guard.
 //! - Every PETSc error code becomes an [`Error::Petsc`](crate::Error::Petsc) carrying PETSc's own
 //!   message (captured by an error handler pushed at start-up, which keeps PETSc from printing its
 //!   traceback: the error is reported once, in one line) and the Rust location of the call.
@@ -15,6 +16,7 @@
 
 mod error;
 mod init;
+mod ksp;
 pub mod log;
 mod matrix;
 pub mod options;
@@ -24,6 +26,7 @@ mod vector;
 
 pub use error::check;
 pub use init::{start_mpi, Petsc};
+pub use ksp::{Ksp, KspOutcome};
 pub use matrix::{Matrix, Sparsity};
 pub use scatter::Scatter;
 pub use snes::{CallbackError, Snes, SnesOutcome};

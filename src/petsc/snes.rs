@@ -110,7 +110,7 @@ impl Snes {
             snes.raw,
             p::PetscBool::PETSC_TRUE
         ))?;
-        set_linear_solver_defaults()?;
+        super::ksp::set_linear_solver_defaults()?;
         chk!(SNESSetTolerances(
             snes.raw,
             tol.atol,
@@ -243,22 +243,6 @@ impl Drop for Snes {
             eprintln!("warning: SNESDestroy returned error code {code}");
         }
     }
-}
-
-/// The default linear solver, as option defaults so that any user choice replaces it whole:
-/// with neither `-ksp_type` nor `-pc_type` given, a direct solve (`preonly`, `lu`, MUMPS); with
-/// only `-pc_type`, GMRES around it; with only `-ksp_type`, LU through MUMPS inside it.
-fn set_linear_solver_defaults() -> Result<()> {
-    use super::options::{has, set_default};
-    let (ksp, pc) = (has("-ksp_type")?, has("-pc_type")?);
-    if !pc {
-        set_default("-pc_type", "lu")?;
-        set_default("-pc_factor_mat_solver_type", "mumps")?;
-    }
-    if !ksp {
-        set_default("-ksp_type", if pc { "gmres" } else { "preonly" })?;
-    }
-    Ok(())
 }
 
 /// Runs a callback body with panics caught; maps the outcome to a PETSc error code.

@@ -1,0 +1,82 @@
+//! Linear solves (`KSP`) outside Newton, e.g. for predictors or projections.
+//!
+//! The solver is chosen in the options database, with the project's defaults (see
+//! [`set_linear_solver_defaults`]); SNES uses the same defaults for its inner KSP.
+
+use petsc_ffi as p;
+
+use super::{chk, Matrix, PetscInt, Vector};
+use crate::error::Result;
+
+/// What one linear solve did.
+#[derive(Clone, Copy, Debug)]
+pub struct KspOutcome {
+    /// True for a positive converged reason.
+    pub converged: bool,
+    /// PETSc's `KSPConvergedReason` code.
+    pub reason: i32,
+    /// Iterations (1 for a direct solve).
+    pub iterations: usize,
+}
+
+/// A PETSc linear solver; destroyed on drop.
+pub struct Ksp {
+    raw: p::KSP,
+}
+
+impl Ksp {
+    /// A linear solver configured from the options database (after the project's defaults).
+    pub fn new() -> Result<Ksp> {
+        super::ensure_initialized()?;
+        let mut raw: p::KSP = std::ptr::null_mut();
+        chk!(KSPCreate(super::comm_world(), &mut raw))?;
+        let ksp = Ksp { raw };
+        set_linear_solver_defaults()?;
+        chk!(KSPSetFromOptions(ksp.raw))?;
+        Ok(ksp)
+    }
+
+    /// Solves `a x = b` (`x` is also the initial guess for iterative solvers).
+    pub fn solve(&mut self, a: &Matrix, b: &Vector, x: &mut Vector) -> Result<KspOutcome> {
+        chk!(KSPSetOperators(self.raw, a.raw, a.raw))?;
+        chk!(KSPSolve(self.raw, b.raw, x.raw))?;
+        let mut reason = p::KSPConvergedReason(0);
+        chk!(KSPGetConvergedReason(self.raw, &mut reason))?;
+        let mut its: PetscInt = 0;
+        chk!(KSPGetIterationNumber(self.raw, &mut its))?;
+        Ok(KspOutcome {
+            converged: reason.0 > 0,
+            reason: reason.0,
+            iterations: its.max(0) as usize,
+        })
+    }
+}
+
+impl Drop for Ksp {
+    fn drop(&mut self) {
+        if super::is_finalized() {
+            return;
+        }
+        // SAFETY: `raw` is a valid KSP owned by this struct.
+        let code = unsafe { p::KSPDestroy(&mut self.raw) };
+        if code != 0 {
+            eprintln!("warning: KSPDestroy returned error code {code}");
+        }
+    }
+}
+
+/// The default linear solver, as option defaults so that any user choice replaces it whole:
+/// with neither `-ksp_type` nor `-pc_type` given, a direct solve (`preonly`, `lu`, MUMPS); with
+/// only `-pc_type`, GMRES around it; with only `-ksp_type`, LU through MUMPS inside it.
+pub(crate) fn set_linear_solver_defaults() -> Result<()> {
+    use super::options::{has, set_default};
+    let (ksp, pc) = (has("-ksp_type")?, has("-pc_type")?);
+    if !pc {
+        set_default("-pc_type", "lu")?;
+        set_default("-pc_factor_mat_solver_type", "mumps")?;
+    }
+    if !ksp {
+        set_default("-ksp_type", if pc { "gmres" } else { "preonly" })?;
+    }
+    Ok(())
+}
