@@ -158,3 +158,28 @@ fn every_shipped_case_is_valid() {
     }
     assert!(n >= 1);
 }
+
+/// A box held only along x on one face can translate in y and z and rotate about x: the
+/// singular tangent is detected (MUMPS null pivots) and reported, on 1 and 2 ranks, instead of
+/// "converging" to an arbitrary rigid shift.
+#[test]
+fn an_under_constrained_body_is_reported() {
+    let toml = column("").replace(
+        "[[dirichlet]]\nset = \"c.zmin\"\ncomponents = [\"x\", \"y\", \"z\"]",
+        "[[dirichlet]]\nset = \"c.zmin\"\ncomponents = [\"z\"]\n[[pressure]]\nset = \"c.zmax\"\nvalue = 1.0",
+    );
+    assert!(toml.contains("components = [\"z\"]"));
+    let case = common::write_case("under_constrained", &toml);
+    for ranks in [1, 2] {
+        let out_dir = case.parent().unwrap().join(format!("out{ranks}"));
+        let out = common::run_raw(&case, ranks, &out_dir, &["-q"]);
+        assert!(!out.status.success());
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let errors: Vec<&str> = stderr
+            .lines()
+            .filter(|l| l.starts_with("mortar: error:"))
+            .collect();
+        assert_eq!(errors.len(), 1, "{ranks} ranks: {stderr}");
+        assert!(errors[0].contains("singular"), "{}", errors[0]);
+    }
+}

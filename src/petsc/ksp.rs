@@ -66,7 +66,8 @@ impl Drop for Ksp {
 }
 
 /// The default linear solver, as option defaults so that any user choice replaces it whole:
-/// with neither `-ksp_type` nor `-pc_type` given, a direct solve (`preonly`, `lu`, MUMPS); with
+/// with neither `-ksp_type` nor `-pc_type` given, a direct solve (`preonly`, `lu`, MUMPS, with
+/// null-pivot detection); with
 /// only `-pc_type`, GMRES around it; with only `-ksp_type`, LU through MUMPS inside it.
 pub(crate) fn set_linear_solver_defaults() -> Result<()> {
     use super::options::{has, set_default};
@@ -74,6 +75,9 @@ pub(crate) fn set_linear_solver_defaults() -> Result<()> {
     if !pc {
         set_default("-pc_type", "lu")?;
         set_default("-pc_factor_mat_solver_type", "mumps")?;
+        // Null-pivot detection: a singular tangent (a body free to move rigidly) is reported
+        // (`Snes::null_pivots`) instead of silently solved.
+        set_default("-mat_mumps_icntl_24", "1")?;
     }
     if !ksp {
         set_default("-ksp_type", if pc { "gmres" } else { "preonly" })?;

@@ -205,6 +205,40 @@ impl Snes {
         self.outcome(ctx.domain_error)
     }
 
+    /// Null pivots MUMPS met in the last factorization (`INFOG(28)`, with null-pivot detection
+    /// on, as by default), or `None` when the linear solver is not a MUMPS factorization.
+    pub fn null_pivots(&self) -> Result<Option<usize>> {
+        let mut ksp: p::KSP = std::ptr::null_mut();
+        chk!(SNESGetKSP(self.raw, &mut ksp))?;
+        let mut pc: p::PC = std::ptr::null_mut();
+        chk!(KSPGetPC(ksp, &mut pc))?;
+        let mut pc_type: p::PCType = std::ptr::null();
+        chk!(PCGetType(pc, &mut pc_type))?;
+        // SAFETY: PETSc returns a static NUL-terminated type name (or null before set-up).
+        let name = |s: *const std::os::raw::c_char| {
+            if s.is_null() {
+                String::new()
+            } else {
+                unsafe { std::ffi::CStr::from_ptr(s) }
+                    .to_string_lossy()
+                    .into_owned()
+            }
+        };
+        if !matches!(name(pc_type).as_str(), "lu" | "cholesky") {
+            return Ok(None);
+        }
+        let mut solver: p::MatSolverType = std::ptr::null();
+        chk!(PCFactorGetMatSolverType(pc, &mut solver))?;
+        if name(solver) != "mumps" {
+            return Ok(None);
+        }
+        let mut factor: p::Mat = std::ptr::null_mut();
+        chk!(PCFactorGetMatrix(pc, &mut factor))?;
+        let mut n: PetscInt = 0;
+        chk!(MatMumpsGetInfog(factor, 28, &mut n))?;
+        Ok(Some(n.max(0) as usize))
+    }
+
     fn outcome(&self, domain_error: Option<String>) -> Result<SnesOutcome> {
         let mut reason = p::SNESConvergedReason(0);
         chk!(SNESGetConvergedReason(self.raw, &mut reason))?;

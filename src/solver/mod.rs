@@ -168,6 +168,18 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
             let solve_seconds = t_solve.elapsed().as_secs_f64();
             phases.add("assembly", assembly);
             phases.add("solve", (solve_seconds - assembly).max(0.0));
+            // (Only after a linear solve: before one there is no factorization to ask.)
+            let null_pivots = if outcome.linear_iterations > 0 {
+                snes.null_pivots()?
+            } else {
+                None
+            };
+            if let Some(n) = null_pivots.filter(|&n| n > 0) {
+                return Err(Error::Solve(format!(
+                    "the tangent stiffness is singular ({n} null pivot(s) at load {t_new}): a \
+                     body can move rigidly; constrain it (dirichlet or symmetry sets)"
+                )));
+            }
             if !outcome.converged {
                 cuts_in_row += 1;
                 let why = outcome
