@@ -117,6 +117,8 @@ pub struct Scene {
     pub quadrature_degree: Option<usize>,
     pub steps: usize,
     pub max_cuts: usize,
+    /// Consistent load-step predictor on (see `solver`).
+    pub predictor: bool,
     pub newton: crate::io::case_file::NewtonSpec,
     pub vtu_every: usize,
     pub verification: Option<Verification>,
@@ -344,6 +346,7 @@ impl Scene {
             quadrature_degree: file.quadrature_degree,
             steps: file.steps.count,
             max_cuts: file.steps.max_cuts,
+            predictor: file.steps.predictor,
             newton: file.newton.clone(),
             vtu_every: file.output.vtu_every,
             verification,

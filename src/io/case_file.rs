@@ -220,6 +220,11 @@ pub struct StepsSpec {
     /// How many times a step may be halved after a failed solve before the run stops. Default 6.
     #[serde(default = "six")]
     pub max_cuts: usize,
+    /// Start each step's Newton from the consistent predictor (the step's load and prescribed
+    /// displacement increments applied through the converged tangent) instead of the last
+    /// converged state. Default true.
+    #[serde(default = "yes")]
+    pub predictor: bool,
 }
 
 impl Default for StepsSpec {
@@ -227,6 +232,7 @@ impl Default for StepsSpec {
         StepsSpec {
             count: 1,
             max_cuts: 6,
+            predictor: true,
         }
     }
 }

@@ -117,6 +117,11 @@ impl Vector {
         Ok(n)
     }
 
+    /// `self *= alpha`.
+    pub fn scale(&mut self, alpha: f64) -> Result<()> {
+        chk!(VecScale(self.raw, alpha))
+    }
+
     /// `self += alpha * x`.
     pub fn axpy(&mut self, alpha: f64, x: &Vector) -> Result<()> {
         chk!(VecAXPY(self.raw, alpha, x.raw))

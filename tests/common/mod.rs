@@ -179,6 +179,13 @@ pressure = 1.0
     )
 }
 
+/// [`compressed_block`] with the load-step predictor off, so that the whole prescribed
+/// increment reaches the first Newton iterate (what the step-cutting tests need) and Newton
+/// takes enough iterations for its asymptotic order to show.
+pub fn compressed_block_no_predictor(element: &str, strain: f64, steps: usize) -> String {
+    compressed_block(element, strain, steps).replace("[steps]\n", "[steps]\npredictor = false\n")
+}
+
 /// A Neo-Hookean block, compressed by `strain` along z in `steps` steps, free to expand sideways
 /// (symmetry planes on xmin, ymin, zmin).
 pub fn compressed_block(element: &str, strain: f64, steps: usize) -> String {
