@@ -127,7 +127,16 @@ pub struct Scene {
 impl Scene {
     /// Reads and validates a case file.
     pub fn load(path: &Path) -> Result<Scene> {
-        let file = CaseFile::read(path)?;
+        Scene::load_edited(path, |_| Ok(()))
+    }
+
+    /// Reads a case file, applies `edit` to its TOML table (see `CaseFile::read_edited`), and
+    /// validates the result.
+    pub fn load_edited(
+        path: &Path,
+        edit: impl FnOnce(&mut toml::Table) -> std::result::Result<(), String>,
+    ) -> Result<Scene> {
+        let file = CaseFile::read_edited(path, edit)?;
         let dir = path
             .parent()
             .map(Path::to_path_buf)

@@ -13,6 +13,7 @@
 //! - [`case`]: the validated scene a run is made of.
 
 pub mod case;
+pub mod contact;
 pub mod dofs;
 pub mod error;
 pub mod fe;

@@ -325,11 +325,24 @@ pub struct VerificationSpec {
 impl CaseFile {
     /// Reads and parses a case file; errors name the file and the offending key.
     pub fn read(path: &Path) -> Result<CaseFile> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        toml::from_str(&text).map_err(|e| Error::Case {
+        CaseFile::read_edited(path, |_| Ok(()))
+    }
+
+    /// Reads a case file, lets `edit` change its TOML table (a study's variant: another
+    /// refinement, another scheme), then parses it; errors name the file and the key.
+    pub fn read_edited(
+        path: &Path,
+        edit: impl FnOnce(&mut toml::Table) -> std::result::Result<(), String>,
+    ) -> Result<CaseFile> {
+        let case_err = |msg: String| Error::Case {
             file: path.to_path_buf(),
-            msg: one_line(&e.to_string()),
-        })
+            msg,
+        };
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let mut table: toml::Table =
+            toml::from_str(&text).map_err(|e| case_err(one_line(&e.to_string())))?;
+        edit(&mut table).map_err(case_err)?;
+        CaseFile::deserialize(table).map_err(|e| case_err(one_line(&e.to_string())))
     }
 }
 

@@ -1,0 +1,13 @@
+//! Interfaces between bodies: search, mortar integration, and what is enforced on them.
+//!
+//! - [`search`]: candidate segment pairs from bounding boxes (an R*-tree), only for the declared
+//!   interfaces.
+//! - [`mortar`]: geometry only: sub-segments of quadratic faces, traction shape functions of the
+//!   three schemes, and the integration of one secondary face against one primary face into
+//!   mortar weights.
+//! - [`tying`]: mesh tying of dissimilar meshes (the vector weighted-gap constraint) by penalty
+//!   plus Uzawa augmented Lagrangian.
+
+pub mod mortar;
+pub mod search;
+pub mod tying;

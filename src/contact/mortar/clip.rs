@@ -1,0 +1,1 @@
+//! Convex polygon clipping in the projection plane.

@@ -1,0 +1,1 @@
+//! Integration of one secondary face against one primary face.

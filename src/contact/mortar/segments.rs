@@ -1,0 +1,1 @@
+//! Sub-segments of faces and traction shape functions.

@@ -1,0 +1,1 @@
+//! Rough search: candidate segment pairs from bounding boxes.

@@ -1,0 +1,1 @@
+//! Mesh tying of dissimilar meshes.
