@@ -20,7 +20,7 @@ cd "$(dirname "$0")/.."
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT
 
-cargo bench --bench assembly --bench newton -- --noplot "$@" 2>&1 | tee "$log" >&2
+cargo bench --bench assembly --bench newton --bench search --bench mortar -- --noplot "$@" 2>&1 | tee "$log" >&2
 
 target=$(cargo metadata --format-version 1 --no-deps |
     python3 -c 'import json, sys; print(json.load(sys.stdin)["target_directory"])')

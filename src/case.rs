@@ -6,6 +6,7 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use crate::contact::mortar::{traction_nodes, TractionScheme};
 use crate::error::{Error, Result};
 use crate::fe::ElementType;
 use crate::io::case_file::{CaseFile, LoadCurveSpec, MeshPart};
@@ -80,6 +81,25 @@ pub struct BodyForce {
     pub curve: usize,
 }
 
+/// A validated interface between two face sets.
+#[derive(Clone, Debug)]
+pub struct Interface {
+    pub name: String,
+    /// Face set names and faces of the two sides.
+    pub secondary_set: String,
+    pub secondary: Vec<FaceRef>,
+    pub primary_set: String,
+    pub primary: Vec<FaceRef>,
+    pub scheme: TractionScheme,
+    /// 1 or 2.
+    pub passes: usize,
+    /// Penalty factor alpha (eps_A = alpha E / h_A).
+    pub penalty: f64,
+    pub uzawa_tol: f64,
+    pub uzawa_max: usize,
+    pub quadrature_degree: Option<usize>,
+}
+
 /// The exact solution a run is measured against.
 #[derive(Clone, Debug)]
 pub enum Verification {
@@ -111,6 +131,8 @@ pub struct Scene {
     pub constraints: Vec<Constraint>,
     pub pressures: Vec<PressureLoad>,
     pub body_forces: Vec<BodyForce>,
+    /// Tied interfaces.
+    pub interfaces: Vec<Interface>,
     /// Sets whose reactions are reported, with their constrained dofs.
     pub reaction_sets: BTreeMap<String, Vec<usize>>,
     /// Element quadrature degree, if the scene overrides the per-type default.
@@ -309,6 +331,13 @@ impl Scene {
                 curve,
             });
         }
+        let interfaces = file
+            .interface
+            .iter()
+            .enumerate()
+            .map(|(i, spec)| build_interface(spec, i, &mesh))
+            .collect::<std::result::Result<Vec<_>, String>>()
+            .map_err(err)?;
         if file.steps.count == 0 {
             return Err(err("steps.count must be at least 1".into()));
         }
@@ -351,6 +380,7 @@ impl Scene {
             constraints,
             pressures,
             body_forces,
+            interfaces,
             reaction_sets,
             quadrature_degree: file.quadrature_degree,
             steps: file.steps.count,
@@ -362,6 +392,15 @@ impl Scene {
         })
     }
 
+    /// True when the tangent never changes: linear-elastic materials, dead pressures only, and
+    /// (tied) interfaces with reference weights. The solver then factorizes once per run.
+    pub fn is_linear(&self) -> bool {
+        self.materials
+            .iter()
+            .all(|m| matches!(m, Material::LinearElastic { .. }))
+            && self.pressures.iter().all(|p| !p.follower)
+    }
+
     /// `constrained[3 * node + c]` for every dof.
     pub fn constrained_mask(&self) -> Vec<bool> {
         let mut m = vec![false; 3 * self.mesh.num_nodes()];
@@ -370,6 +409,80 @@ impl Scene {
         }
         m
     }
+}
+
+fn build_interface(
+    spec: &crate::io::case_file::InterfaceSpec,
+    i: usize,
+    mesh: &Mesh,
+) -> std::result::Result<Interface, String> {
+    let key = format!("interface[{i}]");
+    if spec.kind != "tied" {
+        return Err(format!(
+            "{key}.kind = \"{}\": must be \"tied\" (contact comes with the contact issue)",
+            spec.kind
+        ));
+    }
+    let side = |name: &str, what: &str| -> std::result::Result<Vec<FaceRef>, String> {
+        let faces = mesh
+            .face_set(name)
+            .map_err(|e| format!("{key}.{what}: {e}"))?;
+        if faces.is_empty() {
+            return Err(format!("{key}.{what}: face set '{name}' is empty"));
+        }
+        Ok(faces.to_vec())
+    };
+    let secondary = side(&spec.secondary, "secondary")?;
+    let primary = side(&spec.primary, "primary")?;
+    if spec.secondary == spec.primary {
+        return Err(format!("{key}: secondary and primary are the same set"));
+    }
+    let scheme = TractionScheme::from_number(spec.scheme)
+        .ok_or_else(|| format!("{key}.scheme = {}: must be 1, 2 or 3", spec.scheme))?;
+    if !matches!(spec.passes, 1 | 2) {
+        return Err(format!("{key}.passes = {}: must be 1 or 2", spec.passes));
+    }
+    // Every side that will carry tractions must admit the scheme.
+    let carriers: &[(&str, &Vec<FaceRef>)] = if spec.passes == 2 {
+        &[("secondary", &secondary), ("primary", &primary)]
+    } else {
+        &[("secondary", &secondary)]
+    };
+    for (what, faces) in carriers {
+        let mut kinds: Vec<_> = faces.iter().map(|&f| mesh.face_type(f)).collect();
+        kinds.sort();
+        kinds.dedup();
+        for k in kinds {
+            traction_nodes(k, scheme)
+                .map_err(|e| format!("{key}.scheme on the {what} side: {e}"))?;
+        }
+    }
+    if !(spec.penalty > 0.0 && spec.penalty.is_finite()) {
+        return Err(format!("{key}.penalty = {}: must be > 0", spec.penalty));
+    }
+    if !(spec.uzawa_tol > 0.0 && spec.uzawa_tol.is_finite()) {
+        return Err(format!("{key}.uzawa_tol = {}: must be > 0", spec.uzawa_tol));
+    }
+    if let Some(q) = spec.quadrature_degree {
+        if !(1..=10).contains(&q) {
+            return Err(format!("{key}.quadrature_degree = {q}: must be in 1..=10"));
+        }
+    }
+    Ok(Interface {
+        name: spec.name.clone(),
+        secondary_set: spec.secondary.clone(),
+        secondary,
+        primary_set: spec.primary.clone(),
+        primary,
+        scheme,
+        passes: spec.passes,
+        penalty: spec.penalty,
+        uzawa_tol: spec.uzawa_tol,
+        uzawa_max: spec
+            .uzawa_max
+            .unwrap_or(if spec.passes == 2 { 0 } else { 50 }),
+        quadrature_degree: spec.quadrature_degree,
+    })
 }
 
 fn axis(s: &str) -> Option<usize> {

@@ -120,6 +120,20 @@ impl DofMap {
         }
     }
 
+    /// Also gathers the free dofs of `nodes` (e.g. the nodes of interfaces, whose constraints
+    /// couple nodes of elements on other ranks).
+    pub fn gather_also(&mut self, nodes: &[usize]) {
+        let mut all: Vec<usize> = self.local_nodes.iter().chain(nodes).copied().collect();
+        all.sort_unstable();
+        all.dedup();
+        self.gathered_dofs = all
+            .iter()
+            .flat_map(|&v| (0..3).map(move |c| 3 * v + c))
+            .filter(|&d| self.global[d] >= 0)
+            .collect();
+        self.gathered_global = self.gathered_dofs.iter().map(|&d| self.global[d]).collect();
+    }
+
     /// Global indices of the dofs of an element's nodes, `3 * a + c` order (-1 where constrained).
     pub fn element_dofs(&self, nodes: &[usize], out: &mut Vec<PetscInt>) {
         out.clear();

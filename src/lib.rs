@@ -23,6 +23,7 @@ pub mod mesh;
 pub mod petsc;
 pub mod solid;
 pub mod solver;
+pub mod study;
 pub mod verify;
 
 pub use error::{Error, Result};

@@ -3,6 +3,7 @@
 //! ```text
 //! mortar run CASE.toml [--out DIR] [--quiet] [PETSc options...]
 //! mortar check CASE.toml
+//! mortar study STUDY.toml [--out DIR] [--quiet] [PETSc options...]
 //! ```
 //!
 //! Options with two dashes are ours; everything after the case file that is not ours goes to
@@ -20,6 +21,7 @@ use mpi::topology::{Communicator, SimpleCommunicator};
 use mortar::case::Scene;
 use mortar::petsc::Petsc;
 use mortar::solver::{run, RunOptions};
+use mortar::study::Study;
 use mortar::{Error, Result};
 
 #[derive(Parser, Debug)]
@@ -53,6 +55,21 @@ enum Command {
     Check {
         /// The case file (case.toml).
         case: PathBuf,
+    },
+    /// Runs a convergence study: one scene over refinements and variants (see `mortar::study`).
+    /// PETSc options may follow the study file.
+    Study {
+        /// The study file (study.toml).
+        study: PathBuf,
+        /// Output folder. Default: out/<study file stem>.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// No progress lines.
+        #[arg(long, short)]
+        quiet: bool,
+        /// PETSc options, passed to PETSc unchanged.
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        petsc: Vec<String>,
     },
 }
 
@@ -100,10 +117,10 @@ fn clap_one_line(e: &clap::Error) -> String {
         .join(" ")
 }
 
-/// Moves `--out DIR` and `--quiet` found among the PETSc options (after the case file) in front
-/// of the case file, so clap sees them whatever their position.
+/// Moves `--out DIR` and `--quiet` found among the PETSc options (after the case or study file)
+/// in front of that file, so clap sees them whatever their position.
 fn pull_our_options(args: &[String]) -> Result<Vec<String>, String> {
-    let Some(run_at) = args.iter().position(|a| a == "run") else {
+    let Some(run_at) = args.iter().position(|a| a == "run" || a == "study") else {
         return Ok(args.to_vec());
     };
     let mut head: Vec<String> = args[..=run_at].to_vec();
@@ -146,6 +163,12 @@ fn execute(cli: Cli, program: String) -> Result<()> {
             quiet,
             petsc,
         } => run_command(&case, out, quiet, program, petsc),
+        Command::Study {
+            study,
+            out,
+            quiet,
+            petsc,
+        } => study_command(&study, out, quiet, program, petsc),
     }
 }
 
@@ -189,6 +212,44 @@ fn run_command(
             }
             Ok(())
         }
+        Err(e) => Err(abort_unless_collective(&world, e, rank, size)),
+    }
+}
+
+/// `mortar study`, with the error policy of `mortar run` ([`run_command`]): every rank reads and
+/// validates the study, one PETSc serves every run, a failed run is recorded and the study goes
+/// on, and the study's error (a failed run, a collective error) is printed once by rank 0.
+fn study_command(
+    path: &Path,
+    out: Option<PathBuf>,
+    quiet: bool,
+    program: String,
+    petsc_options: Vec<String>,
+) -> Result<()> {
+    let universe = mortar::petsc::start_mpi()?;
+    let world = universe.world();
+    let (rank, size) = (world.rank(), world.size());
+    let loaded = Study::load(path);
+    let first_failure = first_failing_rank(&world, loaded.is_err());
+    let study = match loaded {
+        Ok(s) if first_failure == size => s,
+        Ok(_) => return Err(Error::Reported),
+        Err(e) if rank == first_failure => return Err(ranked(e, rank, size)),
+        Err(_) => return Err(Error::Reported),
+    };
+    let mut petsc_args = vec![program];
+    petsc_args.extend(petsc_options);
+    let petsc = match Petsc::start(universe, &petsc_args, study.petsc_options.as_deref()) {
+        Ok(p) => p,
+        Err(e) => return Err(abort_unless_collective(&world, e, rank, size)),
+    };
+    let out_dir = out.unwrap_or_else(|| default_out(&study.name));
+    let result = study.run(&petsc, &RunOptions { out_dir, quiet });
+    if rank == 0 {
+        warn_unused_options(&petsc);
+    }
+    match result {
+        Ok(_) => Ok(()),
         Err(e) => Err(abort_unless_collective(&world, e, rank, size)),
     }
 }

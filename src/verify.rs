@@ -79,7 +79,7 @@ pub fn local_figures(
             let (mut err2, mut norm2) = (0.0, 0.0);
             for (e, geom) in elements {
                 let mat = &scene.materials[scene.mesh.body[*e]];
-                let (young, nu) = young_poisson(mat);
+                let (young, nu) = (mat.young(), mat.poisson());
                 gather_nodes(u, scene.mesh.element_nodes(*e), &mut ue);
                 for_each_point(geom, &ue, |x, f, w| {
                     let eps_h = (f + f.transpose()) * 0.5 - Matrix3::identity();
@@ -143,13 +143,6 @@ pub fn metrics(
         m.push(("max_stress_error".to_string(), d / s.max(f64::MIN_POSITIVE)));
     }
     m
-}
-
-fn young_poisson(mat: &crate::material::Material) -> (f64, f64) {
-    match *mat {
-        crate::material::Material::LinearElastic { young, poisson }
-        | crate::material::Material::NeoHookean { young, poisson } => (young, poisson),
-    }
 }
 
 #[cfg(test)]

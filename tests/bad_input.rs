@@ -398,6 +398,26 @@ value = [0.0, 0.0, -1.0]
         ),
         // --- Steps, Newton, verification.
         check(
+            "interface_unknown_kind",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"glued\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\n"),
+            "interface[0].kind",
+        ),
+        check(
+            "interface_missing_face_set",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"tied\"\nsecondary = \"b.top\"\nprimary = \"b.zmin\"\n"),
+            "interface[0].secondary",
+        ),
+        check(
+            "interface_three_passes",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"tied\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\npasses = 3\n"),
+            "interface[0].passes",
+        ),
+        check(
+            "interface_scheme_four",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"tied\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\nscheme = 4\n"),
+            "interface[0].scheme",
+        ),
+        check(
             "key_not_for_this_generator",
             valid_with("divisions = [1, 1, 1]", "divisions = [1, 1, 1]\nn_circ = 3"),
             "mesh[0].n_circ",

@@ -3,3 +3,4 @@
 pub mod case_file;
 pub mod gmsh;
 pub mod output;
+pub mod plot;

@@ -132,6 +132,16 @@ impl Material {
         Ok(())
     }
 
+    /// Young's modulus E.
+    pub fn young(&self) -> f64 {
+        self.params().0
+    }
+
+    /// Poisson's ratio nu.
+    pub fn poisson(&self) -> f64 {
+        self.params().1
+    }
+
     /// Lamé parameters `(lambda, mu)`.
     pub fn lame(&self) -> (f64, f64) {
         let (e, nu) = self.params();

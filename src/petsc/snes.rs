@@ -205,6 +205,39 @@ impl Snes {
         self.outcome(ctx.domain_error)
     }
 
+    /// For a problem whose tangent never changes (linear materials, dead loads, tying): the
+    /// Jacobian is computed and factorized at the first chance, then reused by every later
+    /// solve (`SNESSetLagJacobian(-2)`, persisting across solves).
+    pub fn freeze_jacobian(&mut self) -> Result<()> {
+        chk!(SNESSetLagJacobian(self.raw, -2))?;
+        chk!(SNESSetLagJacobianPersists(
+            self.raw,
+            p::PetscBool::PETSC_TRUE
+        ))
+    }
+
+    /// For a constant tangent already assembled in the Jacobian matrix (and factorized by
+    /// [`Snes::linear_solve`]): never recompute it (`SNESSetLagJacobian(-1)`, persisting).
+    pub fn reuse_jacobian(&mut self) -> Result<()> {
+        chk!(SNESSetLagJacobian(self.raw, -1))?;
+        chk!(SNESSetLagJacobianPersists(
+            self.raw,
+            p::PetscBool::PETSC_TRUE
+        ))
+    }
+
+    /// Solves `a x = b` with the solver's own linear solver (sharing its factorization when
+    /// `a` is the Jacobian matrix and unchanged).
+    pub fn linear_solve(&mut self, a: &Matrix, b: &Vector, x: &mut Vector) -> Result<bool> {
+        let mut ksp: p::KSP = std::ptr::null_mut();
+        chk!(SNESGetKSP(self.raw, &mut ksp))?;
+        chk!(KSPSetOperators(ksp, a.raw, a.raw))?;
+        chk!(KSPSolve(ksp, b.raw, x.raw))?;
+        let mut reason = p::KSPConvergedReason(0);
+        chk!(KSPGetConvergedReason(ksp, &mut reason))?;
+        Ok(reason.0 > 0)
+    }
+
     /// Null pivots MUMPS met in the last factorization (`INFOG(28)`, with null-pivot detection
     /// on, as by default), or `None` when the linear solver is not a MUMPS factorization.
     pub fn null_pivots(&self) -> Result<Option<usize>> {

@@ -105,9 +105,10 @@ impl Bulk {
             .1
     }
 
-    /// Adds this rank's contributions to `F(u)` into `f` (zeroed first) and assembles it.
-    /// `u` holds the displacement of every node this rank touches (`3 * node + c`).
-    pub fn residual(
+    /// Adds this rank's contributions to `F(u)` into `f` (not zeroed, not assembled: the caller
+    /// adds the interfaces' terms and assembles). `u` holds the displacement of every node this
+    /// rank touches (`3 * node + c`).
+    pub fn add_residual(
         &self,
         scene: &Scene,
         dofs: &DofMap,
@@ -115,7 +116,6 @@ impl Bulk {
         t: f64,
         f: &mut Vector,
     ) -> Result<Option<Inverted>> {
-        f.set_all(0.0)?;
         let mut inverted = None;
         let mut idx: Vec<PetscInt> = Vec::new();
         let mut fe = Vec::new();
@@ -141,12 +141,11 @@ impl Bulk {
             dofs.element_dofs(&face.nodes, &mut idx);
             f.set_values(&idx, &fe, true)?;
         }
-        f.assemble()?;
         Ok(inverted)
     }
 
-    /// Assembles the tangent `dF/du` (free dofs only) into `jac` (zeroed first).
-    pub fn jacobian(
+    /// Adds the tangent `dF/du` (free dofs only) into `jac` (not zeroed, not assembled).
+    pub fn add_jacobian(
         &self,
         scene: &Scene,
         dofs: &DofMap,
@@ -154,7 +153,6 @@ impl Bulk {
         t: f64,
         jac: &mut Matrix,
     ) -> Result<Option<Inverted>> {
-        jac.zero_entries()?;
         let mut inverted = None;
         let mut idx: Vec<PetscInt> = Vec::new();
         let mut fe = Vec::new();
@@ -194,7 +192,6 @@ impl Bulk {
             dofs.element_dofs(&face.nodes, &mut idx);
             jac.add_values(&idx, &idx, rows.as_slice())?;
         }
-        jac.assemble()?;
         Ok(inverted)
     }
 

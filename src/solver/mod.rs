@@ -18,6 +18,7 @@
 //! finished (with `"converged": false`).
 
 pub mod bulk;
+pub mod model;
 mod results;
 
 use std::cell::RefCell;
@@ -28,13 +29,15 @@ use mpi::collective::{CommunicatorCollectives, Root, SystemOperation};
 use mpi::topology::Communicator;
 
 use crate::case::Scene;
+use crate::contact::tying::TiedInterfaces;
 use crate::dofs::DofMap;
 use crate::error::{Error, Result};
 use crate::io::output::{StepRecord, Summary};
 use crate::petsc::log::Phases;
 use crate::petsc::snes::Tolerances;
-use crate::petsc::{CallbackError, Ksp, Matrix, Petsc, Scatter, Snes, Vector};
+use crate::petsc::{CallbackError, Matrix, Petsc, Scatter, Snes, Vector};
 use bulk::{Bulk, Inverted};
+use model::Model;
 use results::Results;
 
 /// How a run is carried out.
@@ -83,15 +86,21 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
     let setup_guard = phases.push("setup")?;
 
     let element_rank = partition(scene, &world, ranks)?;
-    let dofs = DofMap::new(
+    let mut dofs = DofMap::new(
         &scene.mesh,
         element_rank,
         rank,
         ranks,
         &scene.constrained_mask(),
     );
-    let bulk = Bulk::new(scene, &dofs)?;
-    let sparsity = dofs.bulk_sparsity(&scene.mesh);
+    let tying = TiedInterfaces::new(scene, &dofs, &world)?;
+    dofs.gather_also(&tying.nodes());
+    let mut model = Model {
+        bulk: Bulk::new(scene, &dofs)?,
+        tying,
+    };
+    let mut sparsity = dofs.bulk_sparsity(&scene.mesh);
+    model.tying.add_sparsity(&dofs, &mut sparsity);
     let mut jac = Matrix::new_aij(&sparsity)?;
     let mut x = Vector::new_mpi(dofs.owned_count)?;
     x.set_all(0.0)?;
@@ -102,7 +111,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         t: 1.0,
         assembly_seconds: 0.0,
     });
-    let force_scale = residual_scale(scene, &dofs, &bulk, &state, &x, &world)?;
+    let force_scale = residual_scale(scene, &dofs, &model, &state, &x, &world)?;
     let mut snes = Snes::new(
         Tolerances {
             atol: scene.newton.atol * force_scale,
@@ -112,7 +121,10 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         },
         &options_source(scene),
     )?;
-    let mut ksp = Ksp::new()?;
+    if scene.is_linear() {
+        snes.freeze_jacobian()?;
+    }
+    let mut tangent_ready = false;
     let mut results = Results::new(scene, &dofs, &opts.out_dir, rank, ranks)?;
     drop(setup_guard);
     phases.add("setup", t_setup.elapsed().as_secs_f64());
@@ -148,35 +160,52 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                 let p = Predictor {
                     scene,
                     dofs: &dofs,
-                    bulk: &bulk,
+                    model: &model,
                     state: &state,
                     world: &world,
                 };
-                p.apply(&mut x, &mut jac, &mut ksp, t, t_new)?;
+                p.apply(&mut x, &mut jac, &mut snes, t, t_new, &mut tangent_ready)?;
             }
             state.borrow_mut().t = t_new;
             let assembly_stage = phases.stage("assembly");
             let solve_guard = phases.push("solve")?;
-            let outcome = {
-                let mut residual = |xv: &Vector, f: &mut Vector| -> Result<(), CallbackError> {
-                    let _stage = assembly_stage.map(|st| st.push()).transpose()?;
-                    let mut s = state.borrow_mut();
-                    let t0 = Instant::now();
-                    s.load(scene, &dofs, xv)?;
-                    let inv = bulk.residual(scene, &dofs, &s.u, s.t, f)?;
-                    s.assembly_seconds += t0.elapsed().as_secs_f64();
-                    collective_domain_check(&world, inv)
+            let multipliers = model.tying.multipliers();
+            let (mut augmentations, mut newton_total) = (0usize, 0usize);
+            let outcome = loop {
+                let outcome = {
+                    let model = &model;
+                    let mut residual = |xv: &Vector, f: &mut Vector| -> Result<(), CallbackError> {
+                        let _stage = assembly_stage.map(|st| st.push()).transpose()?;
+                        let mut s = state.borrow_mut();
+                        let t0 = Instant::now();
+                        s.load(scene, &dofs, xv)?;
+                        let inv = model.residual(scene, &dofs, &s.u, s.t, f)?;
+                        s.assembly_seconds += t0.elapsed().as_secs_f64();
+                        collective_domain_check(&world, inv)
+                    };
+                    let mut jacobian = |xv: &Vector, j: &mut Matrix| -> Result<(), CallbackError> {
+                        let _stage = assembly_stage.map(|st| st.push()).transpose()?;
+                        let mut s = state.borrow_mut();
+                        let t0 = Instant::now();
+                        s.load(scene, &dofs, xv)?;
+                        let inv = model.jacobian(scene, &dofs, &s.u, s.t, j)?;
+                        s.assembly_seconds += t0.elapsed().as_secs_f64();
+                        collective_domain_check(&world, inv)
+                    };
+                    snes.solve(&mut x, &mut jac, &mut residual, &mut jacobian)?
                 };
-                let mut jacobian = |xv: &Vector, j: &mut Matrix| -> Result<(), CallbackError> {
-                    let _stage = assembly_stage.map(|st| st.push()).transpose()?;
-                    let mut s = state.borrow_mut();
-                    let t0 = Instant::now();
-                    s.load(scene, &dofs, xv)?;
-                    let inv = bulk.jacobian(scene, &dofs, &s.u, s.t, j)?;
-                    s.assembly_seconds += t0.elapsed().as_secs_f64();
-                    collective_domain_check(&world, inv)
-                };
-                snes.solve(&mut x, &mut jac, &mut residual, &mut jacobian)?
+                newton_total += outcome.iterations;
+                if !outcome.converged || model.tying.is_empty() {
+                    break outcome;
+                }
+                // Uzawa: augment the tied interfaces until their gaps meet the tolerance.
+                state.borrow_mut().load(scene, &dofs, &x)?;
+                let s = state.borrow();
+                if !model.tying.needs_augmentation(&s.u, augmentations, &world) {
+                    break outcome;
+                }
+                model.tying.augment(&s.u);
+                augmentations += 1;
             };
             drop(solve_guard);
             let assembly = state.borrow().assembly_seconds;
@@ -202,6 +231,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                     .clone()
                     .unwrap_or_else(|| outcome.reason.to_string());
                 x_prev.copy_to(&mut x)?;
+                model.tying.set_multipliers(&multipliers);
                 // Bounded in depth, not only in a row: fail/converge cycles cannot shrink the step
                 // below dt_nominal / 2^max_cuts.
                 let giving_up = cuts_in_row > scene.max_cuts || 0.5 * dt < dt_min;
@@ -232,38 +262,44 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
             let output_guard = phases.push("output")?;
             state.borrow_mut().load(scene, &dofs, &x)?;
             let s = state.borrow();
-            let reactions = results.reactions(scene, &dofs, &bulk, &s.u, t, &world)?;
+            let reactions = results.reactions(scene, &dofs, &model, &s.u, t, &world)?;
             let write_vtu = scene.vtu_every > 0 && (step % scene.vtu_every == 0 || t >= 1.0);
             if write_vtu {
-                results.write_step(scene, &dofs, &bulk, &s.u, step, t, &world)?;
+                results.write_step(scene, &dofs, &model, &s.u, step, t, &world)?;
             }
             drop(s);
             let final_res = outcome.residual_history.last().copied().unwrap_or(0.0);
-            results.push_history(
+            if write_vtu {
+                results.write_interfaces(scene, &model, &s_u(&state), step, t, &world)?;
+            }
+            results.push_history(&results::StepRow {
                 step,
-                t,
-                &outcome,
-                cuts_in_row,
-                final_res,
-                &reactions,
-                [
+                load: t,
+                newton_its: newton_total,
+                augmentations,
+                cuts: cuts_in_row,
+                linear_its: outcome.linear_iterations,
+                residual: final_res,
+                reactions: &reactions,
+                seconds: [
                     assembly,
                     (solve_seconds - assembly).max(0.0),
                     t_out.elapsed().as_secs_f64(),
                 ],
-            )?;
+            })?;
             summary.steps.push(StepRecord {
                 step,
                 load: t,
-                newton_its: outcome.iterations,
+                newton_its: newton_total,
                 cut: cuts_in_row,
                 converged: true,
+                augmentations,
             });
             drop(output_guard);
             phases.add("output", t_out.elapsed().as_secs_f64());
             say(format!(
-                "  step {step} load {t:.6}: {} Newton its, |F| {final_res:.3e}, {} linear its{}, {:.2} s",
-                outcome.iterations,
+                "  step {step} load {t:.6}: {newton_total} Newton its{}, |F| {final_res:.3e}, {} linear its{}, {:.2} s",
+                if augmentations > 0 { format!(" ({augmentations} Uzawa augmentations)") } else { String::new() },
                 outcome.linear_iterations,
                 if cuts_in_row > 0 { format!(", after {cuts_in_row} cut(s)") } else { String::new() },
                 solve_seconds
@@ -288,8 +324,32 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         }
         let s = state.borrow();
         results.write_displacements(scene, &dofs, &s.u, &world)?;
-        for (k, v) in results.metrics(scene, &dofs, &bulk, &s.u, &world)? {
+        for (k, v) in results.metrics(scene, &dofs, &model, &s.u, &world)? {
             summary.metrics.insert(k, v);
+        }
+        for tied in &model.tying.interfaces {
+            let area: f64 = tied.passes[0].rows.iter().map(|r| r.area).sum();
+            summary
+                .metrics
+                .insert(format!("interface_area_{}", tied.name), area);
+            for (kind, count) in &tied.stats {
+                summary
+                    .metrics
+                    .insert(format!("pairs_{}_{kind}", tied.name), *count as f64);
+            }
+        }
+        if !model.tying.is_empty() {
+            let gap = model.tying.max_relative_gap(&s.u, &world);
+            summary.metrics.insert("max_relative_gap".into(), gap);
+            let most = summary
+                .steps
+                .iter()
+                .map(|s| s.augmentations)
+                .max()
+                .unwrap_or(0);
+            summary
+                .metrics
+                .insert("max_augmentations_per_step".into(), most as f64);
         }
         let newton: Vec<usize> = summary.steps.iter().map(|s| s.newton_its).collect();
         summary.metrics.insert(
@@ -347,7 +407,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
 struct Predictor<'a> {
     scene: &'a Scene,
     dofs: &'a DofMap,
-    bulk: &'a Bulk,
+    model: &'a Model,
     state: &'a RefCell<EvalState>,
     world: &'a mpi::topology::SimpleCommunicator,
 }
@@ -355,13 +415,17 @@ struct Predictor<'a> {
 impl Predictor<'_> {
     /// Moves `x` from x_n to the predicted x_0; leaves it unchanged when the tangent or the
     /// residual at x_n is not available (an inverted element: Newton will report it).
+    ///
+    /// `tangent_ready` marks a constant tangent (a linear scene) already assembled in `jac`: it
+    /// is then neither reassembled nor refactorized.
     fn apply(
         &self,
         x: &mut Vector,
         jac: &mut Matrix,
-        ksp: &mut Ksp,
+        snes: &mut Snes,
         t0: f64,
         t1: f64,
+        tangent_ready: &mut bool,
     ) -> Result<()> {
         const EPS: f64 = 1e-6;
         let f0 = self.residual_at(x, t0)?;
@@ -373,21 +437,26 @@ impl Predictor<'_> {
         rhs.axpy(-1.0, &f0)?;
         rhs.scale(1.0 / EPS)?;
         rhs.axpy(1.0, &f0)?;
-        {
+        if !*tangent_ready {
             let mut s = self.state.borrow_mut();
             let started = Instant::now();
             s.t = t0;
             s.load(self.scene, self.dofs, x)?;
-            let inv = self.bulk.jacobian(self.scene, self.dofs, &s.u, t0, jac)?;
+            let inv = self.model.jacobian(self.scene, self.dofs, &s.u, t0, jac)?;
             s.assembly_seconds += started.elapsed().as_secs_f64();
             if collective_domain_check(self.world, inv).is_err() {
                 return Ok(());
             }
+            *tangent_ready = self.scene.is_linear();
         }
         let mut dx = x.duplicate()?;
         dx.set_all(0.0)?;
-        let out = ksp.solve(jac, &rhs, &mut dx)?;
-        if out.converged {
+        let solved = snes.linear_solve(jac, &rhs, &mut dx)?;
+        if *tangent_ready {
+            // The factorization just made is the one Newton would make: keep it for good.
+            snes.reuse_jacobian()?;
+        }
+        if solved {
             x.axpy(-1.0, &dx)?;
         }
         Ok(())
@@ -400,10 +469,17 @@ impl Predictor<'_> {
         let started = Instant::now();
         s.t = t;
         s.load(self.scene, self.dofs, x)?;
-        let inv = self.bulk.residual(self.scene, self.dofs, &s.u, t, &mut f)?;
+        let inv = self
+            .model
+            .residual(self.scene, self.dofs, &s.u, t, &mut f)?;
         s.assembly_seconds += started.elapsed().as_secs_f64();
         Ok(collective_domain_check(self.world, inv).ok().map(|_| f))
     }
+}
+
+/// A copy of the current displacements.
+fn s_u(state: &RefCell<EvalState>) -> Vec<f64> {
+    state.borrow().u.clone()
 }
 
 /// Where PETSc's options came from, for messages.
@@ -458,7 +534,7 @@ fn collective_domain_check(
 fn residual_scale(
     scene: &Scene,
     dofs: &DofMap,
-    bulk: &Bulk,
+    model: &Model,
     state: &RefCell<EvalState>,
     x: &Vector,
     world: &mpi::topology::SimpleCommunicator,
@@ -467,7 +543,7 @@ fn residual_scale(
     let mut s = state.borrow_mut();
     s.t = 1.0;
     s.load(scene, dofs, x)?;
-    let inv = bulk.residual(scene, dofs, &s.u, 1.0, &mut f)?;
+    let inv = model.residual(scene, dofs, &s.u, 1.0, &mut f)?;
     let mut any: i64 = 0;
     world.all_reduce_into(&(inv.is_some() as i64), &mut any, SystemOperation::max());
     let norm = if any > 0 { 0.0 } else { f.norm2()? };

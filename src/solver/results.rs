@@ -19,13 +19,28 @@ use std::path::{Path, PathBuf};
 
 use mpi::collective::{CommunicatorCollectives, SystemOperation};
 
-use super::bulk::{gather_nodes, Bulk};
+use super::bulk::gather_nodes;
+use super::model::Model;
 use crate::case::Scene;
 use crate::dofs::DofMap;
 use crate::error::{Error, Result};
 use crate::io::output::{write_pvd, write_pvtu, write_vtu, Field, History, Piece, Summary};
-use crate::petsc::SnesOutcome;
 use crate::solid::element_stress;
+
+/// One converged step, as a history row: `step, load, newton_its, augmentations, cuts,
+/// linear_its, residual`, the reaction components of every reaction set, and the seconds of
+/// assembly, solve and output. Newton iterations are summed over the step's Uzawa solves.
+pub struct StepRow<'a> {
+    pub step: usize,
+    pub load: f64,
+    pub newton_its: usize,
+    pub augmentations: usize,
+    pub cuts: usize,
+    pub linear_its: usize,
+    pub residual: f64,
+    pub reactions: &'a [[f64; 3]],
+    pub seconds: [f64; 3],
+}
 
 /// Per-run output state.
 pub struct Results {
@@ -35,6 +50,8 @@ pub struct Results {
     ranks: usize,
     history: Option<History>,
     pvd: Vec<(f64, String)>,
+    /// Time series of each interface pass, by file stem.
+    interface_pvd: BTreeMap<String, Vec<(f64, String)>>,
     reaction_sets: Vec<(String, Vec<usize>)>,
 }
 
@@ -61,6 +78,7 @@ impl Results {
                 "step",
                 "load",
                 "newton_its",
+                "augmentations",
                 "cuts",
                 "linear_its",
                 "residual",
@@ -83,6 +101,7 @@ impl Results {
             ranks,
             history,
             pvd: Vec::new(),
+            interface_pvd: BTreeMap::new(),
             reaction_sets,
         })
     }
@@ -93,13 +112,13 @@ impl Results {
         &self,
         scene: &Scene,
         _dofs: &DofMap,
-        bulk: &Bulk,
+        model: &Model,
         u: &[f64],
         t: f64,
         world: &mpi::topology::SimpleCommunicator,
     ) -> Result<Vec<[f64; 3]>> {
         let mut nodal = vec![0.0; u.len()];
-        bulk.nodal_forces(scene, u, t, &mut nodal);
+        model.nodal_forces(scene, u, t, &mut nodal);
         let mut local = Vec::with_capacity(3 * self.reaction_sets.len());
         for (_, dofs) in &self.reaction_sets {
             let mut r = [0.0; 3];
@@ -119,7 +138,7 @@ impl Results {
         &mut self,
         scene: &Scene,
         dofs: &DofMap,
-        bulk: &Bulk,
+        model: &Model,
         u: &[f64],
         step: usize,
         t: f64,
@@ -139,7 +158,7 @@ impl Results {
         let (mut types, mut conn, mut offsets) = (Vec::new(), Vec::new(), Vec::new());
         let (mut stress, mut mises, mut rank_field) = (Vec::new(), Vec::new(), Vec::new());
         let mut ue = Vec::new();
-        for (e, geom) in bulk.elements() {
+        for (e, geom) in model.bulk.elements() {
             types.push(mesh.types[*e].vtk_cell_type());
             conn.extend(mesh.element_nodes(*e).iter().map(|n| local_index[n]));
             offsets.push(conn.len());
@@ -190,33 +209,60 @@ impl Results {
         Ok(())
     }
 
-    /// Appends a history row (rank 0): step, load, newton_its, cuts, linear_its, residual,
-    /// reaction components per set, and the seconds of assembly, solve and output of the step.
-    #[allow(clippy::too_many_arguments)]
-    pub fn push_history(
-        &mut self,
-        step: usize,
-        t: f64,
-        outcome: &SnesOutcome,
-        cuts: usize,
-        residual: f64,
-        reactions: &[[f64; 3]],
-        seconds: [f64; 3],
-    ) -> Result<()> {
+    /// Appends a history row (rank 0).
+    pub fn push_history(&mut self, r: &StepRow) -> Result<()> {
         let Some(h) = self.history.as_mut() else {
             return Ok(());
         };
         let mut row = vec![
-            step as f64,
-            t,
-            outcome.iterations as f64,
-            cuts as f64,
-            outcome.linear_iterations as f64,
-            residual,
+            r.step as f64,
+            r.load,
+            r.newton_its as f64,
+            r.augmentations as f64,
+            r.cuts as f64,
+            r.linear_its as f64,
+            r.residual,
         ];
-        row.extend(reactions.iter().flatten());
-        row.extend(seconds);
+        row.extend(r.reactions.iter().flatten());
+        row.extend(r.seconds);
         h.push_row(row)
+    }
+
+    /// Writes each tied interface (every pass) as its own VTU, with a PVD per interface and
+    /// pass (rank 0): the faces that carried the tractions, with point fields `traction` (t_A),
+    /// `gap` (g_A / a_A), `a` (a_A) at the traction nodes (zero at the others) and `normal`
+    /// (the averaged unit face normal at each node, reference configuration).
+    pub fn write_interfaces(
+        &mut self,
+        scene: &Scene,
+        model: &Model,
+        u: &[f64],
+        step: usize,
+        t: f64,
+        world: &mpi::topology::SimpleCommunicator,
+    ) -> Result<()> {
+        for (i, tied) in model.tying.interfaces.iter().enumerate() {
+            for (p, pass) in tied.passes.iter().enumerate() {
+                let (traction, gap) = model.tying.pass_fields(i, p, u, world);
+                if self.rank != 0 {
+                    continue;
+                }
+                let stem = format!("{}_{}_pass{}", self.case, tied.name, p + 1);
+                let file = format!("vtu/{stem}_{step:04}.vtu");
+                write_interface_piece(
+                    &self.dir.join(&file),
+                    scene,
+                    &pass.secondary,
+                    &pass.rows,
+                    &traction,
+                    &gap,
+                )?;
+                let series = self.interface_pvd.entry(stem.clone()).or_default();
+                series.push((t, file));
+                write_pvd(&self.dir.join(format!("{stem}.pvd")), series)?;
+            }
+        }
+        Ok(())
     }
 
     /// Writes summary.json (rank 0 only).
@@ -265,11 +311,12 @@ impl Results {
         &self,
         scene: &Scene,
         dofs: &DofMap,
-        bulk: &Bulk,
+        model: &Model,
         u: &[f64],
         world: &mpi::topology::SimpleCommunicator,
     ) -> Result<Vec<(String, f64)>> {
-        let local = crate::verify::local_figures(scene, bulk.elements(), &dofs.local_nodes, u);
+        let local =
+            crate::verify::local_figures(scene, model.bulk.elements(), &dofs.local_nodes, u);
         let reduce = |pairs: &[(&'static str, f64)], op: SystemOperation| {
             let vals: Vec<f64> = pairs.iter().map(|p| p.1).collect();
             let mut out = vec![0.0; vals.len()];
@@ -284,4 +331,94 @@ impl Results {
         let maxima = reduce(&local.maxima, SystemOperation::max());
         Ok(crate::verify::metrics(&sums, &maxima))
     }
+}
+
+/// One interface side as a VTU piece (see [`Results::write_interfaces`]).
+fn write_interface_piece(
+    path: &Path,
+    scene: &Scene,
+    faces: &[crate::mesh::FaceRef],
+    rows: &[crate::contact::tying::Row],
+    traction: &[[f64; 3]],
+    gap: &[[f64; 3]],
+) -> Result<()> {
+    let mesh = &scene.mesh;
+    let mut index: BTreeMap<usize, usize> = BTreeMap::new();
+    let (mut types, mut conn, mut offsets) = (Vec::new(), Vec::new(), Vec::new());
+    let mut normal_sum: Vec<[f64; 3]> = Vec::new();
+    for &f in faces {
+        let nodes = mesh.face_nodes(f);
+        let kind = mesh.face_type(f);
+        let x: Vec<[f64; 3]> = nodes.iter().map(|&n| mesh.coords[n]).collect();
+        for (j, (&n, xi)) in nodes.iter().zip(kind.node_coords()).enumerate() {
+            let next = index.len();
+            let k = *index.entry(n).or_insert(next);
+            if k == normal_sum.len() {
+                normal_sum.push([0.0; 3]);
+            }
+            let (nrm, _) = crate::fe::face_normal(kind, &x, xi);
+            for c in 0..3 {
+                normal_sum[k][c] += nrm[c];
+            }
+            let _ = j;
+            conn.push(k);
+        }
+        offsets.push(conn.len());
+        types.push(kind.vtk_cell_type());
+    }
+    let mut points = vec![[0.0; 3]; index.len()];
+    for (&n, &k) in &index {
+        points[k] = mesh.coords[n];
+    }
+    let normals: Vec<f64> = normal_sum
+        .iter()
+        .flat_map(|v| {
+            let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+                .sqrt()
+                .max(f64::MIN_POSITIVE);
+            [v[0] / l, v[1] / l, v[2] / l]
+        })
+        .collect();
+    let (mut t_field, mut g_field, mut a_field) = (
+        vec![0.0; 3 * points.len()],
+        vec![0.0; 3 * points.len()],
+        vec![0.0; points.len()],
+    );
+    for (r, row) in rows.iter().enumerate() {
+        if let Some(&k) = index.get(&row.node) {
+            t_field[3 * k..3 * k + 3].copy_from_slice(&traction[r]);
+            g_field[3 * k..3 * k + 3].copy_from_slice(&gap[r]);
+            a_field[k] = row.area;
+        }
+    }
+    let piece = Piece {
+        points: &points,
+        cell_types: &types,
+        connectivity: &conn,
+        offsets: &offsets,
+        point_data: vec![
+            Field {
+                name: "traction",
+                components: 3,
+                values: &t_field,
+            },
+            Field {
+                name: "gap",
+                components: 3,
+                values: &g_field,
+            },
+            Field {
+                name: "a",
+                components: 1,
+                values: &a_field,
+            },
+            Field {
+                name: "normal",
+                components: 3,
+                values: &normals,
+            },
+        ],
+        cell_data: vec![],
+    };
+    write_vtu(path, &piece)
 }

@@ -7,8 +7,31 @@
 //!
 //! for traction nodes A of the secondary face, displacement nodes B of the secondary face and C
 //! of the primary face, over the overlap gamma of the two faces.
+//!
+//! - [`segments`]: the linear sub-segments of quadratic faces (the paper's Figure 1; Tri6 is
+//!   split into four triangles) and the traction functions `Phi` of the three schemes
+//!   ([`TractionScheme`]); scheme 1 is refused on Quad8 and Tri6 by [`traction_nodes`].
+//! - [`clip`]: robust intersection of convex polygons in the projection plane and the centroid
+//!   pallets the overlap is integrated on.
+//! - [`pair`]: [`integrate_pair`], one secondary face against one primary face: projection
+//!   plane per secondary sub-segment (the face's geometric normal at the sub-segment centre),
+//!   clipping, pallet quadrature, and the weights with the same points for `n1` and `n2` (so
+//!   `sum_B n1_AB = sum_C n2_AC`: linear momentum). Rejections are counted in [`RejectStats`].
+//!
+//! Conventions a caller relies on: traction node `k` of a face is its face-local node `k`
+//! (traction nodes are all nodes, or the corners, which come first); the measure is the true
+//! area of the curved secondary face (a fully covered secondary face gets `sum n1 =` its area);
+//! the traction scheme is validated once with [`traction_nodes`], not in [`integrate_pair`].
 
 pub mod clip;
 pub mod pair;
 pub mod segments;
 
+pub use clip::{clip_convex, is_convex_ccw, pallets, polygon_area, Clipped};
+pub use pair::{
+    integrate_pair, FaceGeom, IntegrationOptions, PairWeights, RejectStats, OPPOSED_NORMALS_COSINE,
+};
+pub use segments::{
+    sub_segments, traction_node_count, traction_nodes, traction_shape, traction_shape_on,
+    SubSegment, TractionScheme,
+};

@@ -17,6 +17,9 @@ pub struct StepRecord {
     /// Times this step was cut before converging.
     pub cut: usize,
     pub converged: bool,
+    /// Uzawa augmentations of the step (0 without augmented interfaces).
+    #[serde(default)]
+    pub augmentations: usize,
 }
 
 /// The run summary.
@@ -87,6 +90,7 @@ mod tests {
                     newton_its: 5,
                     cut: 0,
                     converged: true,
+                    augmentations: 0,
                 },
                 StepRecord {
                     step: 2,
@@ -94,6 +98,7 @@ mod tests {
                     newton_its: 12,
                     cut: 2,
                     converged: false,
+                    augmentations: 3,
                 },
             ],
             timings: [("assembly".to_string(), 1.25), ("solve".to_string(), 3e-3)].into(),

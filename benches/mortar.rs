@@ -1,0 +1,69 @@
+//! Mortar segment-pair integration throughput: face pairs integrated per second, one core.
+//!
+//! Two overlapping faces (the primary shifted by a third of the face in x and y, rotated by
+//! 10 degrees and facing the other way, so that the overlap is a genuine clipped polygon),
+//! integrated with `integrate_pair` (projection, clipping, pallets, quadrature, inverse maps,
+//! weights). Quad4-Quad4 with scheme 2 and the default degree 4; Quad9-Quad9 with scheme 2 and
+//! degree 8 (each Quad9 face is 4 sub-segments, so a face pair is 16 sub-segment pairs).
+
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use mortar::contact::mortar::{
+    integrate_pair, FaceGeom, IntegrationOptions, RejectStats, TractionScheme,
+};
+use mortar::fe::FaceType;
+
+/// Nodes of a face on the unit square [0,1]^2 at height z, rotated by `angle` about its centre
+/// and shifted by `shift`; `flip` reverses the orientation (a primary face looks the other way).
+fn face(kind: FaceType, angle: f64, shift: [f64; 2], flip: bool) -> Vec<[f64; 3]> {
+    let (c, s) = (angle.cos(), angle.sin());
+    kind.node_coords()
+        .into_iter()
+        .map(|xi| {
+            let (mut x, y) = (0.5 * xi[0], 0.5 * xi[1]);
+            if flip {
+                x = -x;
+            }
+            [
+                0.5 + shift[0] + c * x - s * y,
+                0.5 + shift[1] + s * x + c * y,
+                0.0,
+            ]
+        })
+        .collect()
+}
+
+fn bench_pairs(c: &mut Criterion) {
+    let mut group = c.benchmark_group("mortar_pair");
+    group.throughput(Throughput::Elements(1));
+    for (kind, degree) in [(FaceType::Quad4, 4), (FaceType::Quad9, 8)] {
+        let sec = face(kind, 0.0, [0.0, 0.0], false);
+        let pri = face(kind, 10f64.to_radians(), [0.33, 0.33], true);
+        let opts = IntegrationOptions {
+            scheme: TractionScheme::Corners,
+            degree,
+        };
+        let mut stats = RejectStats::default();
+        let w = integrate_pair(
+            &FaceGeom { kind, x: &sec },
+            &FaceGeom { kind, x: &pri },
+            &opts,
+            &mut stats,
+        );
+        assert!(w.area > 0.1, "{kind:?}: overlap area {}", w.area);
+        group.bench_function(kind.name(), |b| {
+            b.iter(|| {
+                let mut stats = RejectStats::default();
+                integrate_pair(
+                    &FaceGeom { kind, x: &sec },
+                    &FaceGeom { kind, x: &pri },
+                    &opts,
+                    &mut stats,
+                )
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_pairs);
+criterion_main!(benches);

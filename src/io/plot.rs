@@ -1,0 +1,746 @@
+//! Log-log plots of an error against the mesh size, as PNG and SVG (plotters).
+//!
+//! Text is drawn by plotters' pure-Rust `ab_glyph` renderer with a TrueType font read from disk
+//! at run time (DejaVu Sans from Debian's `fonts-dejavu-core`, which `ci/setup` installs): no
+//! fontconfig, no freetype, no network. When no font file is found the plot is still written,
+//! without any text (no title, labels, tick values or legend), and [`loglog`] returns a warning
+//! saying so.
+//!
+//! Axes are logarithmic with ticks of our own ([`LogAxis`]): plotters' log scale only labels
+//! powers of ten, which leaves a convergence study within one decade of h without a single tick.
+//! Ticks are taken from the sparsest of the mantissa sets {1}, {1, 2, 5}, {1, ..., 9},
+//! {1, 1.5, ..., 9.5} (times powers of ten) that gives at least three labels in the range (four
+//! within a decade); the light grid lines sit at every {1, ..., 9} x 10^k.
+//!
+//! The legend gives every series' least-squares slope of log(error) against log(h)
+//! ([`fitted_slope`]), the observed order of convergence.
+
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint, KeyPointWeight, Ranged};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+use crate::io::output::write_atomic;
+use crate::{Error, Result};
+
+/// One curve of a plot.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Series {
+    /// Legend entry (the fitted slope is appended).
+    pub name: String,
+    /// `(h, error)` points; both must be positive and finite to appear on log axes.
+    pub points: Vec<(f64, f64)>,
+}
+
+/// Font files tried, in order, for the plot text.
+const FONT_FILES: [&str; 3] = [
+    "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+    "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf",
+    "/usr/share/fonts/truetype/freefont/FreeSans.ttf",
+];
+
+/// The family name the font is registered under (and written into the SVG).
+const FAMILY: &str = "sans-serif";
+
+/// At most this many labelled ticks per axis.
+const LABELS: usize = 10;
+
+/// Image size in pixels.
+const SIZE: (u32, u32) = (800, 600);
+
+/// Line colours (colour-blind-safe qualitative palette) and marker shapes, by series.
+const COLORS: [RGBColor; 6] = [
+    RGBColor(0, 114, 178),
+    RGBColor(213, 94, 0),
+    RGBColor(0, 158, 115),
+    RGBColor(204, 121, 167),
+    RGBColor(86, 180, 233),
+    RGBColor(230, 159, 0),
+];
+
+/// Registers the first readable font file with plotters, once per process; `None` if none is.
+fn font() -> Option<&'static Path> {
+    static FONT: OnceLock<Option<&'static Path>> = OnceLock::new();
+    *FONT.get_or_init(|| {
+        FONT_FILES.iter().map(Path::new).find(|p| {
+            let Ok(bytes) = std::fs::read(p) else {
+                return false;
+            };
+            // plotters keeps a 'static reference to the font: the bytes live as long as the
+            // process (read once, a few hundred kB).
+            let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
+            plotters::style::register_font(FAMILY, FontStyle::Normal, bytes).is_ok()
+        })
+    })
+}
+
+/// Writes `<stem>.png` and `<stem>.svg`: log-log axes, one line with markers per series, a
+/// legend with each series' fitted slope, the title and the axis labels. Returns warnings
+/// (no font found: the plot has no text; points that cannot be shown on log axes).
+pub fn loglog(
+    stem: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+) -> Result<Vec<String>> {
+    let mut warnings = Vec::new();
+    let text = font().is_some();
+    if !text {
+        warnings.push(format!(
+            "no font file found (tried {}; Debian package fonts-dejavu-core): {} has no text",
+            FONT_FILES.join(", "),
+            with_suffix(stem, "png").display()
+        ));
+    }
+    let plot = Plot::new(title, x_label, y_label, series, text, &mut warnings);
+    plot.write(stem)?;
+    Ok(warnings)
+}
+
+/// Least-squares slope of log(y) against log(x): the observed order when y is an error and x a
+/// mesh size. Points with a non-positive or non-finite coordinate are ignored; NaN when fewer
+/// than two distinct x remain.
+pub fn fitted_slope(points: &[(f64, f64)]) -> f64 {
+    let logs: Vec<(f64, f64)> = points
+        .iter()
+        .filter(|&&(x, y)| loggable(x) && loggable(y))
+        .map(|&(x, y)| (x.ln(), y.ln()))
+        .collect();
+    if logs.len() < 2 {
+        return f64::NAN;
+    }
+    let n = logs.len() as f64;
+    let mx = logs.iter().map(|p| p.0).sum::<f64>() / n;
+    let my = logs.iter().map(|p| p.1).sum::<f64>() / n;
+    let sxy: f64 = logs.iter().map(|(x, y)| (x - mx) * (y - my)).sum();
+    let sxx: f64 = logs.iter().map(|(x, _)| (x - mx).powi(2)).sum();
+    if sxx > 0.0 {
+        sxy / sxx
+    } else {
+        f64::NAN
+    }
+}
+
+/// True if the point can be placed on log-log axes.
+fn loglog_ok(p: &(f64, f64)) -> bool {
+    loggable(p.0) && loggable(p.1)
+}
+
+/// True if `v` can be placed on a log axis.
+fn loggable(v: f64) -> bool {
+    v.is_finite() && v > 0.0
+}
+
+/// `stem` with `.ext` appended to its file name (a stem may itself contain dots).
+fn with_suffix(stem: &Path, ext: &str) -> PathBuf {
+    let mut name = stem.file_name().unwrap_or_default().to_os_string();
+    name.push(".");
+    name.push(ext);
+    stem.with_file_name(name)
+}
+
+/// A plot ready to draw on any backend.
+struct Plot<'a> {
+    title: &'a str,
+    x_label: &'a str,
+    y_label: &'a str,
+    /// Legend entries and the points that can be shown.
+    curves: Vec<(String, Vec<(f64, f64)>)>,
+    x: LogAxis,
+    y: LogAxis,
+    text: bool,
+}
+
+impl<'a> Plot<'a> {
+    fn new(
+        title: &'a str,
+        x_label: &'a str,
+        y_label: &'a str,
+        series: &[Series],
+        text: bool,
+        warnings: &mut Vec<String>,
+    ) -> Plot<'a> {
+        let mut curves = Vec::new();
+        for s in series {
+            let shown: Vec<(f64, f64)> = s.points.iter().copied().filter(loglog_ok).collect();
+            if shown.len() < s.points.len() {
+                warnings.push(format!(
+                    "plot '{title}': {} point(s) of '{}' are not positive and finite and are \
+                     not shown",
+                    s.points.len() - shown.len(),
+                    s.name
+                ));
+            }
+            let slope = fitted_slope(&shown);
+            let entry = match shown.len() {
+                0 => format!("{}: no points", s.name),
+                _ if slope.is_finite() => format!("{}: slope {slope:.2}", s.name),
+                _ => s.name.clone(),
+            };
+            curves.push((entry, shown));
+        }
+        let all: Vec<(f64, f64)> = curves.iter().flat_map(|c| c.1.iter().copied()).collect();
+        let x = LogAxis::around(all.iter().map(|p| p.0), 0.08, (0.1, 1.0));
+        let y = LogAxis::around(all.iter().map(|p| p.1), 0.12, (0.01, 1.0));
+        Plot {
+            title,
+            x_label,
+            y_label,
+            curves,
+            x,
+            y,
+            text,
+        }
+    }
+
+    /// Writes `<stem>.png` and `<stem>.svg`, each atomically.
+    fn write(&self, stem: &Path) -> Result<()> {
+        let png = with_suffix(stem, "png");
+        let svg = with_suffix(stem, "svg");
+
+        let mut svg_text = String::new();
+        {
+            let root = SVGBackend::with_string(&mut svg_text, SIZE).into_drawing_area();
+            self.draw(&root).map_err(|e| {
+                Error::Other(format!("{}: cannot draw the plot: {e}", svg.display()))
+            })?;
+        }
+        write_atomic(&svg, svg_text.as_bytes())?;
+
+        // The bitmap backend encodes the PNG into a file named by extension: draw into a
+        // temporary file beside the target, then publish its bytes atomically.
+        let tmp = with_suffix(
+            &stem.with_file_name(format!(
+                ".{}.{}",
+                png.file_name().unwrap_or_default().to_string_lossy(),
+                std::process::id()
+            )),
+            "png",
+        );
+        let drawn = (|| -> std::result::Result<Vec<u8>, String> {
+            {
+                let root = BitMapBackend::new(&tmp, SIZE).into_drawing_area();
+                self.draw(&root)?;
+            }
+            std::fs::read(&tmp).map_err(|e| e.to_string())
+        })();
+        let _ = std::fs::remove_file(&tmp);
+        let bytes = drawn
+            .map_err(|e| Error::Other(format!("{}: cannot draw the plot: {e}", png.display())))?;
+        write_atomic(&png, &bytes)
+    }
+
+    /// Draws the plot on `root` and presents it.
+    ///
+    /// Markers and the legend are drawn in pixels on `root` with elements that do not carry the
+    /// backend type: plotters' composed elements do, and its series and legend bounds then
+    /// demand a `'static` backend, which one writing to a borrowed path or string is not.
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+    ) -> std::result::Result<(), String> {
+        let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+        root.fill(&WHITE).map_err(e)?;
+        let mut builder = ChartBuilder::on(root);
+        builder.margin(20).margin_right(30);
+        if self.text {
+            builder
+                .caption(self.title, (FAMILY, 28))
+                .x_label_area_size(60)
+                .y_label_area_size(85);
+        }
+        let mut chart = builder
+            .build_cartesian_2d(self.x.clone(), self.y.clone())
+            .map_err(e)?;
+
+        let x_fmt = |v: &f64| tick_label(*v);
+        let y_fmt = |v: &f64| tick_label(*v);
+        let mut mesh = chart.configure_mesh();
+        mesh.x_labels(LABELS)
+            .y_labels(LABELS)
+            .max_light_lines(9)
+            .light_line_style(RGBColor(235, 235, 235))
+            .bold_line_style(RGBColor(200, 200, 200))
+            .axis_style(BLACK.stroke_width(1));
+        if self.text {
+            mesh.x_desc(self.x_label)
+                .y_desc(self.y_label)
+                .x_label_formatter(&x_fmt)
+                .y_label_formatter(&y_fmt)
+                .label_style((FAMILY, 18))
+                .axis_desc_style((FAMILY, 20));
+        }
+        mesh.draw().map_err(e)?;
+
+        // The frame (without text the axes above are not drawn).
+        let (xr, yr) = (self.x.range(), self.y.range());
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                vec![
+                    (xr.start, yr.start),
+                    (xr.end, yr.start),
+                    (xr.end, yr.end),
+                    (xr.start, yr.end),
+                    (xr.start, yr.start),
+                ],
+                BLACK.stroke_width(1),
+            )))
+            .map_err(e)?;
+
+        for (i, (_, points)) in self.curves.iter().enumerate() {
+            let color = COLORS[i % COLORS.len()];
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    points.clone(),
+                    color.stroke_width(2),
+                )))
+                .map_err(e)?;
+            for p in points {
+                marker(root, i, chart.backend_coord(p), color).map_err(e)?;
+            }
+        }
+        if self.text && !self.curves.is_empty() {
+            let pixels: Vec<Vec<(i32, i32)>> = self
+                .curves
+                .iter()
+                .map(|(_, pts)| pts.iter().map(|p| chart.backend_coord(p)).collect())
+                .collect();
+            self.legend(root, chart.plotting_area().get_pixel_range(), &pixels)
+                .map_err(e)?;
+        }
+        root.present().map_err(e)
+    }
+
+    /// The legend: per series a line with its marker, then its name and slope, in a box in the
+    /// corner of the plotting area `plot` (pixels) that hides the least of the curves (`pixels`).
+    fn legend<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        plot: (Range<i32>, Range<i32>),
+        pixels: &[Vec<(i32, i32)>],
+    ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+        let style =
+            TextStyle::from((FAMILY, 18).into_font()).pos(Pos::new(HPos::Left, VPos::Center));
+        let (pad, line_w, row_h) = (12, 36, 28);
+        let mut text_w = 0;
+        for (entry, _) in &self.curves {
+            text_w = text_w.max(root.estimate_text_size(entry, &style)?.0 as i32);
+        }
+        let w = pad + line_w + 10 + text_w + pad;
+        let h = pad + row_h * self.curves.len() as i32 + pad - 8;
+        let (x0, y0) = legend_corner(plot, (w, h), pixels);
+        let (x1, y1) = (x0 + w, y0 + h);
+        root.draw(&Rectangle::new(
+            [(x0, y0), (x1, y1)],
+            WHITE.mix(0.92).filled(),
+        ))?;
+        root.draw(&Rectangle::new(
+            [(x0, y0), (x1, y1)],
+            RGBColor(120, 120, 120),
+        ))?;
+        for (i, (entry, _)) in self.curves.iter().enumerate() {
+            let color = COLORS[i % COLORS.len()];
+            let y = y0 + pad + row_h / 2 - 4 + row_h * i as i32;
+            let x = x0 + pad;
+            root.draw(&PathElement::new(
+                vec![(x, y), (x + line_w, y)],
+                color.stroke_width(2),
+            ))?;
+            marker(root, i, (x + line_w / 2, y), color)?;
+            root.draw(&Text::new(
+                entry.clone(),
+                (x + line_w + 10, y),
+                style.clone(),
+            ))?;
+        }
+        Ok(())
+    }
+}
+
+/// The upper left pixel of a `size` box in one corner of `plot` (lower right, upper left, lower
+/// left, upper right: the first that covers the fewest samples of the `curves`).
+fn legend_corner(
+    (px, py): (Range<i32>, Range<i32>),
+    (w, h): (i32, i32),
+    curves: &[Vec<(i32, i32)>],
+) -> (i32, i32) {
+    const INSET: i32 = 12;
+    let (left, right) = (px.start + INSET, px.end - INSET - w);
+    let (top, bottom) = (py.start + INSET, py.end - INSET - h);
+    let mut samples = Vec::new();
+    for c in curves {
+        samples.extend(c.iter().map(|&(x, y)| (f64::from(x), f64::from(y))));
+        for s in c.windows(2) {
+            let (a, b) = (s[0], s[1]);
+            for k in 1..32 {
+                let t = f64::from(k) / 32.0;
+                samples.push((
+                    f64::from(a.0) + t * f64::from(b.0 - a.0),
+                    f64::from(a.1) + t * f64::from(b.1 - a.1),
+                ));
+            }
+        }
+    }
+    let covered = |(x0, y0): (i32, i32)| {
+        let m = 8.0; // markers have a size
+        let (x0, y0) = (f64::from(x0) - m, f64::from(y0) - m);
+        let (x1, y1) = (x0 + f64::from(w) + 2.0 * m, y0 + f64::from(h) + 2.0 * m);
+        samples
+            .iter()
+            .filter(|&&(x, y)| x >= x0 && x <= x1 && y >= y0 && y <= y1)
+            .count()
+    };
+    let corners = [(right, bottom), (left, top), (left, bottom), (right, top)];
+    let mut best = corners[0];
+    let mut least = usize::MAX;
+    for c in corners {
+        let n = covered(c);
+        if n < least {
+            best = c;
+            least = n;
+        }
+    }
+    best
+}
+
+/// Marker `shape` (circle, triangle, square, diamond, cross, by series) at pixel `at`.
+fn marker<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    shape: usize,
+    (x, y): (i32, i32),
+    color: RGBColor,
+) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    const S: i32 = 6;
+    let fill = color.filled();
+    match shape % 5 {
+        0 => root.draw(&Circle::new((x, y), S, fill)),
+        1 => root.draw(&Polygon::new(
+            vec![(x, y - S - 1), (x + S + 1, y + S), (x - S - 1, y + S)],
+            fill,
+        )),
+        2 => root.draw(&Rectangle::new(
+            [(x - S + 1, y - S + 1), (x + S - 1, y + S - 1)],
+            fill,
+        )),
+        3 => root.draw(&Polygon::new(
+            vec![
+                (x, y - S - 1),
+                (x + S + 1, y),
+                (x, y + S + 1),
+                (x - S - 1, y),
+            ],
+            fill,
+        )),
+        _ => {
+            let pen = color.stroke_width(3);
+            root.draw(&PathElement::new(vec![(x - S, y - S), (x + S, y + S)], pen))?;
+            root.draw(&PathElement::new(vec![(x - S, y + S), (x + S, y - S)], pen))
+        }
+    }
+}
+
+/// A logarithmic axis over `[lo, hi]` with ticks at "nice" mantissas (see the module docs).
+#[derive(Clone, Debug)]
+struct LogAxis {
+    lo: f64,
+    hi: f64,
+}
+
+impl LogAxis {
+    /// The range of `values` (positive), widened by `pad` of its log-length on each side (at
+    /// least a factor 1.1), then out to the next labelled tick at either end unless that
+    /// widens it by more than 15 % of its log-length; `empty` without values.
+    fn around(values: impl Iterator<Item = f64>, pad: f64, empty: (f64, f64)) -> LogAxis {
+        let (lo, hi) = values.fold((f64::INFINITY, 0.0f64), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
+        if !(lo.is_finite() && hi >= lo) {
+            return LogAxis {
+                lo: empty.0,
+                hi: empty.1,
+            };
+        }
+        let factor = ((hi / lo).ln() * pad).exp().max(1.1);
+        let padded = LogAxis {
+            lo: lo / factor,
+            hi: hi * factor,
+        };
+        let set = padded.label_set(LABELS);
+        let length = (padded.hi / padded.lo).ln();
+        let below = LogAxis {
+            lo: padded.lo / 10.0,
+            hi: padded.lo,
+        }
+        .ticks(set)
+        .last()
+        .copied()
+        .filter(|&t| (padded.lo / t).ln() <= 0.15 * length);
+        let above = LogAxis {
+            lo: padded.hi,
+            hi: padded.hi * 10.0,
+        }
+        .ticks(set)
+        .first()
+        .copied()
+        .filter(|&t| (t / padded.hi).ln() <= 0.15 * length);
+        LogAxis {
+            lo: below.unwrap_or(padded.lo),
+            hi: above.unwrap_or(padded.hi),
+        }
+    }
+
+    /// Tick values `m 10^k` in range for the mantissas `set`.
+    fn ticks(&self, set: &[f64]) -> Vec<f64> {
+        let (k0, k1) = (
+            self.lo.log10().floor() as i32,
+            self.hi.log10().ceil() as i32,
+        );
+        let mut out = Vec::new();
+        for k in k0..=k1 {
+            for &m in set {
+                // m / 10^-k is exact for the decimal mantissas where m * 10^k is not.
+                let v = if k < 0 {
+                    m / 10f64.powi(-k)
+                } else {
+                    m * 10f64.powi(k)
+                };
+                if v >= self.lo * (1.0 - 1e-12) && v <= self.hi * (1.0 + 1e-12) {
+                    out.push(v);
+                }
+            }
+        }
+        out
+    }
+
+    /// The mantissas of the labelled ticks: the sparsest set with at least 3 ticks in range (4
+    /// within a decade) and at most `max`.
+    fn label_set(&self, max: usize) -> &'static [f64] {
+        const SETS: [&[f64]; 4] = [
+            &[1.0],
+            &[1.0, 2.0, 5.0],
+            &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0],
+            &[
+                1.0, 1.5, 2.0, 2.5, 3.0, 3.5, 4.0, 4.5, 5.0, 5.5, 6.0, 6.5, 7.0, 7.5, 8.0, 8.5,
+                9.0, 9.5,
+            ],
+        ];
+        let least = if self.hi / self.lo < 10.0 { 4 } else { 3 };
+        let mut best = SETS[0];
+        for set in SETS {
+            let n = self.ticks(set).len();
+            if n > max {
+                break;
+            }
+            best = set;
+            if n >= least {
+                break;
+            }
+        }
+        best
+    }
+
+    /// The labelled ticks (see [`LogAxis::label_set`]; over more than `max` decades, every
+    /// few powers of ten).
+    fn bold_ticks(&self, max: usize) -> Vec<f64> {
+        let t = self.ticks(self.label_set(max));
+        let every = t.len().div_ceil(max.max(1)).max(1);
+        t.into_iter().step_by(every).collect()
+    }
+}
+
+impl Ranged for LogAxis {
+    type FormatOption = DefaultFormatting;
+    type ValueType = f64;
+
+    fn map(&self, value: &f64, limit: (i32, i32)) -> i32 {
+        let s = (value.ln() - self.lo.ln()) / (self.hi.ln() - self.lo.ln());
+        limit.0 + (s * f64::from(limit.1 - limit.0)).round() as i32
+    }
+
+    fn key_points<H: KeyPointHint>(&self, hint: H) -> Vec<f64> {
+        let max = hint.max_num_points();
+        match hint.weight() {
+            KeyPointWeight::Bold => self.bold_ticks(max),
+            KeyPointWeight::Any => {
+                let all = self.ticks(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]);
+                if all.len() <= max {
+                    all
+                } else {
+                    self.ticks(&[1.0])
+                }
+            }
+        }
+    }
+
+    fn range(&self) -> Range<f64> {
+        self.lo..self.hi
+    }
+}
+
+/// A tick value in at most 3 significant digits: `0.25`, `40`, `2e-5`, `1.5e6`.
+fn tick_label(v: f64) -> String {
+    if !loggable(v) {
+        return format!("{v}");
+    }
+    let e = v.log10().floor() as i32;
+    if (-3..4).contains(&e) {
+        let decimals = (2 - e).max(0) as usize;
+        trim_zeros(format!("{v:.decimals$}"))
+    } else {
+        let m = v / 10f64.powi(e);
+        format!("{}e{e}", trim_zeros(format!("{m:.2}")))
+    }
+}
+
+/// `"0.2500"` -> `"0.25"`, `"3.00"` -> `"3"`.
+fn trim_zeros(s: String) -> String {
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn slope_of_a_power_law() {
+        let pts: Vec<(f64, f64)> = [0.5, 0.25, 0.125, 0.1]
+            .iter()
+            .map(|&h: &f64| (h, 3.0 * h.powf(1.7)))
+            .collect();
+        assert!((fitted_slope(&pts) - 1.7).abs() < 1e-12);
+        assert!(fitted_slope(&pts[..1]).is_nan());
+        assert!(fitted_slope(&[(0.5, 1.0), (0.5, 2.0)]).is_nan());
+        // Unusable points are ignored.
+        let mut with_bad = pts.clone();
+        with_bad.push((0.2, 0.0));
+        with_bad.push((f64::NAN, 1.0));
+        assert!((fitted_slope(&with_bad) - 1.7).abs() < 1e-12);
+    }
+
+    #[test]
+    fn tick_labels() {
+        assert_eq!(tick_label(0.25), "0.25");
+        assert_eq!(tick_label(0.3), "0.3");
+        assert_eq!(tick_label(1.0), "1");
+        assert_eq!(tick_label(40.0), "40");
+        assert_eq!(tick_label(0.002), "0.002");
+        assert_eq!(tick_label(2e-5), "2e-5");
+        assert_eq!(tick_label(1.5e6), "1.5e6");
+    }
+
+    #[test]
+    fn log_ticks_are_nice_and_never_too_few() {
+        // Within one decade: 1..9 mantissas, or halves.
+        let a = LogAxis { lo: 0.15, hi: 0.56 };
+        assert_eq!(a.bold_ticks(10), vec![0.2, 0.3, 0.4, 0.5]);
+        let a = LogAxis { lo: 0.23, hi: 0.54 };
+        assert_eq!(a.bold_ticks(10), vec![0.25, 0.3, 0.35, 0.4, 0.45, 0.5]);
+        // Several decades: powers of ten.
+        let a = LogAxis { lo: 3e-4, hi: 0.2 };
+        assert_eq!(a.bold_ticks(10), vec![1e-3, 1e-2, 0.1]);
+        // Two decades: 1, 2, 5.
+        let a = LogAxis {
+            lo: 0.004,
+            hi: 0.15,
+        };
+        assert_eq!(a.bold_ticks(10), vec![0.005, 0.01, 0.02, 0.05, 0.1]);
+        // Many decades: every other power.
+        let a = LogAxis { lo: 1e-15, hi: 1e3 };
+        assert_eq!(a.bold_ticks(10).len(), 10);
+    }
+
+    #[test]
+    fn axis_ends_at_labelled_ticks_when_close() {
+        let a = LogAxis::around([0.0325, 0.35].into_iter(), 0.12, (1.0, 2.0));
+        assert_eq!((a.lo, a.hi), (0.02, 0.5));
+        let a = LogAxis::around([0.25, 0.5].into_iter(), 0.08, (1.0, 2.0));
+        assert_eq!((a.lo, a.hi), (0.2, 0.55));
+        // Far from a tick (here a power of ten): only padded.
+        let a = LogAxis::around([4e-4, 0.25].into_iter(), 0.02, (1.0, 2.0));
+        assert!(
+            a.lo > 1e-4 && a.lo < 4e-4 && a.hi > 0.25 && a.hi < 1.0,
+            "{a:?}"
+        );
+        let a = LogAxis::around(std::iter::empty(), 0.1, (0.1, 1.0));
+        assert_eq!((a.lo, a.hi), (0.1, 1.0));
+    }
+
+    fn scratch(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("mortar-plot-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    fn sample() -> Vec<Series> {
+        let hs = [0.5, 1.0 / 3.0, 0.25];
+        vec![
+            Series {
+                name: "hex8".into(),
+                points: hs.iter().map(|&h| (h, 0.3 * h)).collect(),
+            },
+            Series {
+                name: "hex20".into(),
+                points: hs.iter().map(|&h| (h, 0.1 * h * h)).collect(),
+            },
+        ]
+    }
+
+    #[test]
+    fn plot_files_are_written() {
+        let dir = scratch("files");
+        let stem = dir.join("convergence");
+        let warnings = loglog(&stem, "Title", "h", "error", &sample()).unwrap();
+        let png = std::fs::read(dir.join("convergence.png")).unwrap();
+        assert!(png.starts_with(b"\x89PNG\r\n\x1a\n"));
+        let svg = std::fs::read_to_string(dir.join("convergence.svg")).unwrap();
+        assert!(svg.contains("<svg"));
+        if font().is_some() {
+            assert!(warnings.is_empty(), "{warnings:?}");
+            assert!(svg.contains("slope 2.00"), "legend missing");
+        }
+        let mut names: Vec<String> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert_eq!(names, ["convergence.png", "convergence.svg"]);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn plot_without_font_has_no_text() {
+        let dir = scratch("nofont");
+        let mut warnings = Vec::new();
+        let plot = Plot::new("T", "h", "e", &sample(), false, &mut warnings);
+        plot.write(&dir.join("c")).unwrap();
+        assert!(warnings.is_empty());
+        let svg = std::fs::read_to_string(dir.join("c.svg")).unwrap();
+        assert!(!svg.contains("<text"));
+        assert!(std::fs::metadata(dir.join("c.png")).unwrap().len() > 100);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn bad_points_are_skipped_with_a_warning() {
+        let dir = scratch("bad");
+        let s = vec![Series {
+            name: "x".into(),
+            points: vec![(0.5, 0.1), (0.25, f64::NAN), (0.0, 1.0)],
+        }];
+        let w = loglog(&dir.join("c"), "T", "h", "e", &s).unwrap();
+        assert!(w.iter().any(|w| w.contains("2 point(s) of 'x'")), "{w:?}");
+        let empty = loglog(&dir.join("d"), "T", "h", "e", &[]).unwrap();
+        assert!(empty.iter().all(|w| w.contains("font")));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}

@@ -1,0 +1,779 @@
+//! Convergence studies: one scene run over a list of mesh refinements and variants, in one
+//! process (`mortar study STUDY.toml`), measured against the mesh size.
+//!
+//! # The study file
+//!
+//! Every key is documented where it is declared ([`StudyFile`], [`RefinementSpec`],
+//! [`VariantSpec`]); unknown keys are errors.
+//!
+//! ```toml
+//! case = "case.toml"                 # the base scene, relative to the study file
+//! metric = "energy_error"            # the summary metric measured against h
+//! title = "Thick sphere"             # plot title (optional)
+//!
+//! [[refinement]]                     # at least 2
+//! h = 0.5                            # mesh size for the x axis
+//! set = { "mesh.0.n_circ" = 2, "mesh.0.n_rad" = 2 }
+//!
+//! [[variant]]                        # at least 1
+//! name = "hex20"                     # in file names and metric names: slope_<name>
+//! set = { "mesh.0.element" = "hex20" }
+//! ```
+//!
+//! # Edits
+//!
+//! Each run is the base case, then the variant's `set`, then the refinement's `set`, then the
+//! variant's `refinement_set[level]` if it has one (a later setting of the same path wins), applied to the case's TOML table before it is validated
+//! ([`Scene::load_edited`]). A path is dotted: a segment that is a number indexes an array (of
+//! tables: `mesh.0` is the first `[[mesh]]`), any other names a key of a table. The value
+//! replaces what is there (a table value replaces a whole table). A missing key may be created in
+//! a table (with tables created for the rest of the path: `"steps.count" = 4` works on a case
+//! without `[steps]`); the case parser then validates it like any key. A path that cannot lead
+//! anywhere is an error naming the study key and the path: an index past the end of an array or
+//! into a missing key, a name used on an array, a path through a number or a string. Write
+//! dotted paths in quotes: TOML reads `mesh.0.n_circ = 2` unquoted as nested tables, which this
+//! refuses with a hint.
+//!
+//! Before any run, every variant x refinement is built and validated (paths, case keys, mesh),
+//! so a mistake in the last variant is reported at once, not after the first runs. Every run
+//! shares one PETSc: its options are the base case's options file (no variant may change
+//! `petsc_options`) and the command line.
+//!
+//! # Outputs (in `--out DIR`, default `out/<study file stem>`; written by rank 0)
+//!
+//! - `runs/<variant>/<level>/`: each run's own outputs (`level` = index of the refinement).
+//! - `study.csv`: one row per run, rewritten after every run: `variant, level, h, error` (the
+//!   metric; empty for a failed run), `seconds` (wall clock), `newton_its` (total over the steps
+//!   that converged), `converged` (`true`/`false`).
+//! - `summary.json` ([`Summary`]): `case` = the study name (the study file's stem), `converged` =
+//!   every run converged, `metrics`: `slope_<variant>` (least-squares slope of log(error)
+//!   against log(h) over the variant's converged runs, when there are two or more) and
+//!   `error_<variant>_<level>`, plus `failed_runs`; `timings.total`; `message` lists the failed
+//!   runs. Rewritten after every run.
+//! - `convergence.png`, `convergence.svg`: the log-log plot of error against h, one line per
+//!   variant, the slopes in the legend ([`crate::io::plot`]).
+//!
+//! A failed run (not converged, a bad PETSc option, ...) is recorded (`converged = false`, no
+//! point on the plot) and the study goes on; when any failed, the study returns an error after
+//! writing everything. A metric missing from a converged run's summary stops the study: it
+//! would be missing from every run.
+
+use std::collections::BTreeSet;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use serde::Deserialize;
+
+use crate::case::Scene;
+use crate::error::{Error, Result};
+use crate::io::output::{write_atomic, Summary};
+use crate::io::plot;
+use crate::petsc::Petsc;
+use crate::solver::{self, RunOptions};
+
+/// The study file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StudyFile {
+    /// The base scene: a case file, relative to the study file.
+    pub case: String,
+    /// The metric of the runs' `summary.json` measured against h (`energy_error` for the Lamé
+    /// sphere).
+    pub metric: String,
+    /// Plot title. Default: `<scene name>: <metric>`.
+    pub title: Option<String>,
+    /// Mesh refinements, at least 2, each with its mesh size.
+    #[serde(default)]
+    pub refinement: Vec<RefinementSpec>,
+    /// Variants (element types, schemes, ...), at least 1: each is run at every refinement.
+    #[serde(default)]
+    pub variant: Vec<VariantSpec>,
+}
+
+/// One mesh refinement.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RefinementSpec {
+    /// Mesh size (the plot's x axis and the slope's h), finite and > 0, different for every
+    /// refinement.
+    pub h: f64,
+    /// Edits of the case: dotted path = value (see the module docs). Applied after the
+    /// variant's. Default: none.
+    #[serde(default)]
+    pub set: toml::Table,
+}
+
+/// One variant of the scene.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VariantSpec {
+    /// Name: letters, digits, `_` and `-`, unique; used in file names (`runs/<name>/`) and metric
+    /// names (`slope_<name>`).
+    pub name: String,
+    /// Edits of the case: dotted path = value (see the module docs). Default: none.
+    #[serde(default)]
+    pub set: toml::Table,
+    /// Edits per refinement level, applied last (after the refinement's own `set`): one table
+    /// per refinement, for a variant whose mesh follows the level differently (e.g. a
+    /// conforming mesh where the others are dissimilar). Default: none.
+    #[serde(default)]
+    pub refinement_set: Vec<toml::Table>,
+}
+
+/// A validated study.
+#[derive(Clone, Debug)]
+pub struct Study {
+    /// Study name (the study file's stem): `case` in its summary, the default output folder.
+    pub name: String,
+    /// The study file.
+    pub file: PathBuf,
+    /// The base case file.
+    pub case: PathBuf,
+    pub metric: String,
+    pub title: String,
+    pub refinements: Vec<RefinementSpec>,
+    pub variants: Vec<VariantSpec>,
+    /// The PETSc options file of the base case (shared by every run).
+    pub petsc_options: Option<PathBuf>,
+}
+
+/// One run of a study, as recorded in `study.csv`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunRecord {
+    pub variant: String,
+    pub level: usize,
+    pub h: f64,
+    /// The metric, for a converged run.
+    pub error: Option<f64>,
+    pub seconds: f64,
+    pub newton_its: usize,
+    pub converged: bool,
+    /// Why the run failed.
+    pub message: Option<String>,
+}
+
+/// What a study did.
+#[derive(Clone, Debug)]
+pub struct StudyReport {
+    pub runs: Vec<RunRecord>,
+    /// The study summary (also in `summary.json`).
+    pub summary: Summary,
+}
+
+impl Study {
+    /// Reads a study file and validates it, with every variant x refinement of its case
+    /// (paths, keys, mesh). Errors name the study file and the key.
+    pub fn load(path: &Path) -> Result<Study> {
+        let err = |msg: String| Error::Case {
+            file: path.to_path_buf(),
+            msg,
+        };
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let file: StudyFile = toml::from_str(&text).map_err(|e| err(one_line(&e.to_string())))?;
+        let name = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "study".into());
+        if file.metric.trim().is_empty() {
+            return Err(err("metric: empty".into()));
+        }
+        if file.refinement.len() < 2 {
+            return Err(err(format!(
+                "refinement: at least 2 are needed for a slope, found {}",
+                file.refinement.len()
+            )));
+        }
+        for (i, r) in file.refinement.iter().enumerate() {
+            if !(r.h.is_finite() && r.h > 0.0) {
+                return Err(err(format!(
+                    "refinement[{i}].h = {}: must be finite and > 0",
+                    r.h
+                )));
+            }
+            if let Some(j) = file.refinement[..i].iter().position(|o| o.h == r.h) {
+                return Err(err(format!(
+                    "refinement[{i}].h = {} repeats refinement[{j}].h",
+                    r.h
+                )));
+            }
+        }
+        if file.variant.is_empty() {
+            return Err(err("variant: at least 1 is needed, found none".into()));
+        }
+        let mut names = BTreeSet::new();
+        for (i, v) in file.variant.iter().enumerate() {
+            let ok = !v.name.is_empty()
+                && v.name
+                    .chars()
+                    .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+            if !ok {
+                return Err(err(format!(
+                    "variant[{i}].name = \"{}\": use letters, digits, '_' and '-' (it names \
+                     folders and metrics)",
+                    v.name
+                )));
+            }
+            if !names.insert(v.name.as_str()) {
+                return Err(err(format!(
+                    "variant[{i}].name = \"{}\" is used twice",
+                    v.name
+                )));
+            }
+        }
+        let dir = path.parent().unwrap_or(Path::new(""));
+        let case = dir.join(&file.case);
+        if !case.is_file() {
+            return Err(err(format!(
+                "case = \"{}\": no such file {}",
+                file.case,
+                case.display()
+            )));
+        }
+
+        // The paths, against the case as written: errors name the study key.
+        let case_text = std::fs::read_to_string(&case).map_err(|e| Error::io(&case, e))?;
+        let base: toml::Table = toml::from_str(&case_text).map_err(|e| Error::Case {
+            file: case.clone(),
+            msg: one_line(&e.to_string()),
+        })?;
+        for (i, v) in file.variant.iter().enumerate() {
+            if !v.refinement_set.is_empty() && v.refinement_set.len() != file.refinement.len() {
+                return Err(err(format!(
+                    "variant[{i}].refinement_set has {} tables for {} refinements",
+                    v.refinement_set.len(),
+                    file.refinement.len()
+                )));
+            }
+            for (j, r) in file.refinement.iter().enumerate() {
+                let mut t = base.clone();
+                apply_sets(&mut t, &edits(i, v, j, r)).map_err(err)?;
+            }
+        }
+
+        let mut study = Study {
+            name,
+            file: path.to_path_buf(),
+            case,
+            metric: file.metric.clone(),
+            title: String::new(),
+            refinements: file.refinement,
+            variants: file.variant,
+            petsc_options: None,
+        };
+        // Every run's scene, built and dropped one at a time.
+        let base_scene = Scene::load(&study.case)?;
+        study.petsc_options = base_scene.petsc_options.clone();
+        study.title = file
+            .title
+            .unwrap_or_else(|| format!("{}: {}", base_scene.name, study.metric));
+        drop(base_scene);
+        for i in 0..study.variants.len() {
+            for j in 0..study.refinements.len() {
+                let scene = study.scene(i, j)?;
+                if scene.petsc_options != study.petsc_options {
+                    return Err(err(format!(
+                        "variant '{}' at refinement[{j}] changes petsc_options: every run of a \
+                         study shares one PETSc (give options on the command line instead)",
+                        study.variants[i].name
+                    )));
+                }
+            }
+        }
+        Ok(study)
+    }
+
+    /// The scene of variant `v` at refinement `level`; errors name the study, the variant and
+    /// the refinement.
+    pub fn scene(&self, v: usize, level: usize) -> Result<Scene> {
+        let (variant, refinement) = (&self.variants[v], &self.refinements[level]);
+        let sets = edits(v, variant, level, refinement);
+        Scene::load_edited(&self.case, |t| apply_sets(t, &sets)).map_err(|e| Error::Case {
+            file: self.file.clone(),
+            msg: format!("variant '{}' at refinement[{level}]: {e}", variant.name),
+        })
+    }
+
+    /// Runs every variant at every refinement (variant by variant, coarsest refinement as
+    /// listed first) and writes the study's outputs in `opts.out_dir` (see the module docs).
+    /// Progress (one line per run) on rank 0 unless `opts.quiet`. Returns an error after
+    /// writing everything if any run failed.
+    pub fn run(&self, petsc: &Petsc, opts: &RunOptions) -> Result<StudyReport> {
+        let rank = petsc.rank();
+        let say = |msg: String| {
+            if rank == 0 && !opts.quiet {
+                println!("{msg}");
+            }
+        };
+        let out = &opts.out_dir;
+        if rank == 0 {
+            std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+        }
+        let started = Instant::now();
+        let total = self.variants.len() * self.refinements.len();
+        say(format!(
+            "mortar study {}: {} variant(s) x {} refinement(s) = {total} runs of {} on {} \
+             rank(s) -> {}",
+            self.name,
+            self.variants.len(),
+            self.refinements.len(),
+            self.case.display(),
+            petsc.size(),
+            out.display()
+        ));
+        let mut runs: Vec<RunRecord> = Vec::with_capacity(total);
+        let mut summary = Summary::default();
+        for (v, variant) in self.variants.iter().enumerate() {
+            for (level, refinement) in self.refinements.iter().enumerate() {
+                let run_dir = out.join("runs").join(&variant.name).join(level.to_string());
+                let t0 = Instant::now();
+                let result = self.scene(v, level).and_then(|scene| {
+                    solver::run(
+                        &scene,
+                        petsc,
+                        &RunOptions {
+                            out_dir: run_dir.clone(),
+                            quiet: true,
+                        },
+                    )
+                });
+                let seconds = t0.elapsed().as_secs_f64();
+                let mut record = RunRecord {
+                    variant: variant.name.clone(),
+                    level,
+                    h: refinement.h,
+                    error: None,
+                    seconds,
+                    newton_its: 0,
+                    converged: false,
+                    message: None,
+                };
+                match result {
+                    Ok(s) if !s.converged => {
+                        record.newton_its = s.steps.iter().map(|st| st.newton_its).sum();
+                        record.message = s.message.clone();
+                    }
+                    Ok(s) => {
+                        let Some(&e) = s.metrics.get(&self.metric) else {
+                            return Err(Error::Case {
+                                file: self.file.clone(),
+                                msg: format!(
+                                    "metric = \"{}\": the runs do not report it (they report: {})",
+                                    self.metric,
+                                    s.metrics.keys().cloned().collect::<Vec<_>>().join(", ")
+                                ),
+                            });
+                        };
+                        record.error = Some(e);
+                        record.converged = true;
+                        record.newton_its = s.steps.iter().map(|st| st.newton_its).sum();
+                    }
+                    // Errors every rank meets alike are this run's failure; any other (an I/O
+                    // error on one rank) ends the study, as it ends a run.
+                    Err(e) if e.is_collective() => {
+                        if rank == 0 {
+                            record.newton_its = Summary::read(&run_dir.join("summary.json"))
+                                .map(|s| s.steps.iter().map(|st| st.newton_its).sum())
+                                .unwrap_or(0);
+                        }
+                        record.message = Some(e.to_string());
+                    }
+                    Err(e) => return Err(e),
+                }
+                say(progress_line(&self.metric, &record));
+                runs.push(record);
+                if rank == 0 {
+                    write_atomic(&out.join("study.csv"), study_csv(&runs).as_bytes())?;
+                    summary = self.summary(&runs, petsc.size(), started.elapsed().as_secs_f64());
+                    summary.write(&out.join("summary.json"))?;
+                }
+            }
+        }
+        let failed = runs.iter().filter(|r| !r.converged).count();
+        if rank == 0 {
+            let series: Vec<plot::Series> = self
+                .variants
+                .iter()
+                .map(|v| plot::Series {
+                    name: v.name.clone(),
+                    points: points_of(&runs, &v.name),
+                })
+                .collect();
+            let warnings = plot::loglog(
+                &out.join("convergence"),
+                &self.title,
+                "mesh size h",
+                &self.metric,
+                &series,
+            )?;
+            for w in warnings {
+                eprintln!("mortar: warning: {w}");
+            }
+            let slopes: Vec<String> = self
+                .variants
+                .iter()
+                .map(|v| {
+                    let s = plot::fitted_slope(&points_of(&runs, &v.name));
+                    if s.is_finite() {
+                        format!("{} {s:.3}", v.name)
+                    } else {
+                        format!("{} (none)", v.name)
+                    }
+                })
+                .collect();
+            say(format!(
+                "mortar study {}: slopes {}; {} of {total} runs converged -> {}",
+                self.name,
+                slopes.join(", "),
+                total - failed,
+                out.display()
+            ));
+        }
+        if failed > 0 {
+            let first = runs
+                .iter()
+                .find(|r| !r.converged)
+                .map_or(String::new(), |r| {
+                    format!(
+                        "; first: {} level {}: {}",
+                        r.variant,
+                        r.level,
+                        r.message.as_deref().unwrap_or("not converged")
+                    )
+                });
+            return Err(Error::Solve(format!(
+                "study {}: {failed} of {total} runs failed (see {}){first}",
+                self.name,
+                out.join("study.csv").display()
+            )));
+        }
+        Ok(StudyReport { runs, summary })
+    }
+
+    /// The study summary of the runs so far.
+    fn summary(&self, runs: &[RunRecord], ranks: usize, seconds: f64) -> Summary {
+        let mut s = Summary {
+            case: self.name.clone(),
+            ranks,
+            converged: runs.len() == self.variants.len() * self.refinements.len()
+                && runs.iter().all(|r| r.converged),
+            ..Default::default()
+        };
+        s.timings.insert("total".into(), seconds);
+        for v in &self.variants {
+            let slope = plot::fitted_slope(&points_of(runs, &v.name));
+            if slope.is_finite() {
+                s.metrics.insert(format!("slope_{}", v.name), slope);
+            }
+        }
+        for r in runs {
+            if let Some(e) = r.error.filter(|e| r.converged && e.is_finite()) {
+                s.metrics
+                    .insert(format!("error_{}_{}", r.variant, r.level), e);
+            }
+        }
+        let failed: Vec<String> = runs
+            .iter()
+            .filter(|r| !r.converged)
+            .map(|r| {
+                format!(
+                    "{} level {}: {}",
+                    r.variant,
+                    r.level,
+                    r.message.as_deref().unwrap_or("not converged")
+                )
+            })
+            .collect();
+        s.metrics.insert("failed_runs".into(), failed.len() as f64);
+        if !failed.is_empty() {
+            s.message = Some(format!("failed runs: {}", failed.join("; ")));
+        }
+        s
+    }
+}
+
+/// The `(h, error)` points of a variant's converged runs.
+fn points_of(runs: &[RunRecord], variant: &str) -> Vec<(f64, f64)> {
+    runs.iter()
+        .filter(|r| r.variant == variant && r.converged)
+        .filter_map(|r| r.error.map(|e| (r.h, e)))
+        .collect()
+}
+
+/// One progress line.
+fn progress_line(metric: &str, r: &RunRecord) -> String {
+    let result = match (r.converged, r.error) {
+        (true, Some(e)) => format!("{metric} {e:.4e}"),
+        _ => format!(
+            "FAILED ({})",
+            r.message.as_deref().unwrap_or("not converged")
+        ),
+    };
+    format!(
+        "  {} level {} h {:.4}: {result}, {} Newton its, {:.2} s",
+        r.variant, r.level, r.h, r.newton_its, r.seconds
+    )
+}
+
+/// `study.csv` of the runs so far.
+fn study_csv(runs: &[RunRecord]) -> String {
+    let mut out = String::from("variant,level,h,error,seconds,newton_its,converged\n");
+    for r in runs {
+        let error = r.error.map(|e| e.to_string()).unwrap_or_default();
+        // Variant names are restricted to [A-Za-z0-9_-]: no quoting needed.
+        let _ = writeln!(
+            out,
+            "{},{},{},{error},{},{},{}",
+            r.variant, r.level, r.h, r.seconds, r.newton_its, r.converged
+        );
+    }
+    out
+}
+
+/// The edits of one run, in order: the variant's, then the refinement's; each with the study
+/// key it comes from.
+fn edits<'a>(
+    v: usize,
+    variant: &'a VariantSpec,
+    level: usize,
+    refinement: &'a RefinementSpec,
+) -> Vec<(String, &'a str, &'a toml::Value)> {
+    let mut out = Vec::new();
+    let mut tables = vec![
+        (format!("variant[{v}].set"), &variant.set),
+        (format!("refinement[{level}].set"), &refinement.set),
+    ];
+    if let Some(per_level) = variant.refinement_set.get(level) {
+        tables.push((format!("variant[{v}].refinement_set[{level}]"), per_level));
+    }
+    for (key, table) in tables {
+        for (path, value) in table {
+            out.push((key.clone(), path.as_str(), value));
+        }
+    }
+    out
+}
+
+/// Applies edits `(study key, dotted path, value)` to a case table, in order.
+fn apply_sets(
+    case: &mut toml::Table,
+    edits: &[(String, &str, &toml::Value)],
+) -> std::result::Result<(), String> {
+    for (key, path, value) in edits {
+        set_path(case, path, (*value).clone()).map_err(|m| format!("{key}.\"{path}\": {m}"))?;
+    }
+    Ok(())
+}
+
+/// Sets `value` at the dotted `path` of `table` (see the module docs for what may be created).
+pub fn set_path(
+    table: &mut toml::Table,
+    path: &str,
+    value: toml::Value,
+) -> std::result::Result<(), String> {
+    let segments: Vec<&str> = path.split('.').collect();
+    if segments.iter().any(|s| s.trim().is_empty()) {
+        return Err("not a dotted path (an empty segment)".into());
+    }
+    set_in_table(table, &segments, 0, value)
+}
+
+/// An array index segment.
+fn index(segment: &str) -> Option<usize> {
+    segment.parse().ok()
+}
+
+/// [`set_path`] from segment `i` on, in the table at `segments[..i]`.
+fn set_in_table(
+    table: &mut toml::Table,
+    segments: &[&str],
+    i: usize,
+    value: toml::Value,
+) -> std::result::Result<(), String> {
+    let seg = segments[i];
+    let at = segments[..=i].join(".");
+    if index(seg).is_some() {
+        let name = if i == 0 {
+            "the case".to_string()
+        } else {
+            format!("'{}'", segments[..i].join("."))
+        };
+        return Err(format!(
+            "{name} is a table, not an array: '{seg}' cannot index it"
+        ));
+    }
+    if i + 1 == segments.len() {
+        if let (Some(toml::Value::Array(_)), toml::Value::Table(_)) = (table.get(seg), &value) {
+            return Err(format!(
+                "a table would replace the array '{at}' (write dotted paths in quotes: \
+                 \"{at}.0.key\" = value)"
+            ));
+        }
+        table.insert(seg.to_string(), value);
+        return Ok(());
+    }
+    if !table.contains_key(seg) {
+        if let Some(k) = index(segments[i + 1]) {
+            return Err(format!("no '{at}' in the case to index with {k}"));
+        }
+        table.insert(seg.to_string(), toml::Value::Table(toml::Table::new()));
+    }
+    let next = table.get_mut(seg).expect("present or just inserted");
+    set_in_value(next, segments, i + 1, value)
+}
+
+/// [`set_path`] from segment `i` on, in the value at `segments[..i]`.
+fn set_in_value(
+    here: &mut toml::Value,
+    segments: &[&str],
+    i: usize,
+    value: toml::Value,
+) -> std::result::Result<(), String> {
+    let at = segments[..i].join(".");
+    match here {
+        toml::Value::Table(t) => set_in_table(t, segments, i, value),
+        toml::Value::Array(items) => {
+            let Some(k) = index(segments[i]) else {
+                return Err(format!(
+                    "'{at}' is an array: the next segment must be an index, not '{}'",
+                    segments[i]
+                ));
+            };
+            let n = items.len();
+            let Some(item) = items.get_mut(k) else {
+                let entries = if n == 1 { "entry" } else { "entries" };
+                return Err(format!("'{at}' has {n} {entries}, no index {k}"));
+            };
+            if i + 1 == segments.len() {
+                *item = value;
+                Ok(())
+            } else {
+                set_in_value(item, segments, i + 1, value)
+            }
+        }
+        other => Err(format!(
+            "'{at}' is a value ({}), not a table",
+            other.type_str()
+        )),
+    }
+}
+
+/// Folds a multi-line parser message into one line.
+fn one_line(s: &str) -> String {
+    s.lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && !l.chars().all(|c| c == '|' || c == '^' || c == ' '))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn case() -> toml::Table {
+        toml::from_str(
+            r#"
+name = "s"
+[[mesh]]
+element = "hex20"
+n_circ = 2
+[[mesh]]
+element = "hex8"
+[steps]
+count = 1
+"#,
+        )
+        .unwrap()
+    }
+
+    fn set(path: &str, v: toml::Value) -> std::result::Result<toml::Table, String> {
+        let mut t = case();
+        set_path(&mut t, path, v)?;
+        Ok(t)
+    }
+
+    #[test]
+    fn paths_reach_array_entries_and_tables() {
+        let t = set("mesh.1.n_circ", 3.into()).unwrap();
+        assert_eq!(t["mesh"][1]["n_circ"].as_integer(), Some(3));
+        assert_eq!(t["mesh"][0]["n_circ"].as_integer(), Some(2));
+        let t = set("mesh.0.element", "hex27".into()).unwrap();
+        assert_eq!(t["mesh"][0]["element"].as_str(), Some("hex27"));
+        let t = set("steps.count", 4.into()).unwrap();
+        assert_eq!(t["steps"]["count"].as_integer(), Some(4));
+        // Missing keys are created, tables too: the case parser validates them.
+        let t = set("newton.max_it", 2.into()).unwrap();
+        assert_eq!(t["newton"]["max_it"].as_integer(), Some(2));
+        let t = set("mesh.0.n_rad", 2.into()).unwrap();
+        assert_eq!(t["mesh"][0]["n_rad"].as_integer(), Some(2));
+        let t = set("name", "other".into()).unwrap();
+        assert_eq!(t["name"].as_str(), Some("other"));
+    }
+
+    #[test]
+    fn impossible_paths_are_named() {
+        let e = set("mesh.2.n_circ", 3.into()).unwrap_err();
+        assert_eq!(e, "'mesh' has 2 entries, no index 2");
+        let e = set("meshes.0.n_circ", 3.into()).unwrap_err();
+        assert!(e.contains("no 'meshes'"), "{e}");
+        let e = set("mesh.first.n_circ", 3.into()).unwrap_err();
+        assert!(e.contains("'mesh' is an array"), "{e}");
+        let e = set("name.x", 3.into()).unwrap_err();
+        assert!(e.contains("'name' is a value (string)"), "{e}");
+        let e = set("mesh.0.n_circ.x", 3.into()).unwrap_err();
+        assert!(e.contains("'mesh.0.n_circ' is a value (integer)"), "{e}");
+        let e = set("steps.0", 3.into()).unwrap_err();
+        assert!(e.contains("'steps' is a table"), "{e}");
+        let e = set("mesh..x", 3.into()).unwrap_err();
+        assert!(e.contains("empty segment"), "{e}");
+        let nested: toml::Value =
+            toml::from_str::<toml::Table>("a = { \"0\" = { n = 1 } }").unwrap()["a"].clone();
+        let e = set("mesh", nested).unwrap_err();
+        assert!(e.contains("in quotes"), "{e}");
+    }
+
+    #[test]
+    fn later_edits_win_and_errors_name_the_key() {
+        let mut t = case();
+        let (a, b) = (toml::Value::from(3), toml::Value::from(4));
+        let edits = vec![
+            ("variant[0].set".to_string(), "mesh.0.n_circ", &a),
+            ("refinement[1].set".to_string(), "mesh.0.n_circ", &b),
+        ];
+        apply_sets(&mut t, &edits).unwrap();
+        assert_eq!(t["mesh"][0]["n_circ"].as_integer(), Some(4));
+        let bad = vec![("refinement[1].set".to_string(), "mesh.7.n_circ", &a)];
+        let e = apply_sets(&mut t, &bad).unwrap_err();
+        assert!(
+            e.starts_with("refinement[1].set.\"mesh.7.n_circ\": 'mesh'"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn csv_rows() {
+        let r = RunRecord {
+            variant: "hex8".into(),
+            level: 1,
+            h: 0.5,
+            error: Some(0.125),
+            seconds: 2.5,
+            newton_its: 1,
+            converged: true,
+            message: None,
+        };
+        let failed = RunRecord {
+            error: None,
+            converged: false,
+            message: Some("x".into()),
+            ..r.clone()
+        };
+        assert_eq!(
+            study_csv(&[r, failed]),
+            "variant,level,h,error,seconds,newton_its,converged\n\
+             hex8,1,0.5,0.125,2.5,1,true\n\
+             hex8,1,0.5,,2.5,1,false\n"
+        );
+    }
+}
