@@ -187,23 +187,13 @@ fn run_command(
     program: String,
     petsc_options: Vec<String>,
 ) -> Result<()> {
-    let universe = mortar::petsc::start_mpi()?;
-    let world = universe.world();
+    let (scene, petsc, world) = start(
+        || Scene::load(case),
+        |s| s.petsc_options.as_deref(),
+        program,
+        petsc_options,
+    )?;
     let (rank, size) = (world.rank(), world.size());
-    let loaded = Scene::load(case);
-    let first_failure = first_failing_rank(&world, loaded.is_err());
-    let scene = match loaded {
-        Ok(s) if first_failure == size => s,
-        Ok(_) => return Err(Error::Reported),
-        Err(e) if rank == first_failure => return Err(ranked(e, rank, size)),
-        Err(_) => return Err(Error::Reported),
-    };
-    let mut petsc_args = vec![program];
-    petsc_args.extend(petsc_options);
-    let petsc = match Petsc::start(universe, &petsc_args, scene.petsc_options.as_deref()) {
-        Ok(p) => p,
-        Err(e) => return Err(abort_unless_collective(&world, e, rank, size)),
-    };
     let out_dir = out.unwrap_or_else(|| default_out(&scene.name));
     match run(&scene, &petsc, &RunOptions { out_dir, quiet }) {
         Ok(_) => {
@@ -212,6 +202,33 @@ fn run_command(
             }
             Ok(())
         }
+        Err(e) => Err(abort_unless_collective(&world, e, rank, size)),
+    }
+}
+
+/// Starts MPI, loads the input on every rank (agreeing on success: only the first failing rank
+/// reports), then starts PETSc with the input's options file.
+fn start<T>(
+    load: impl FnOnce() -> Result<T>,
+    options_file: impl Fn(&T) -> Option<&Path>,
+    program: String,
+    petsc_options: Vec<String>,
+) -> Result<(T, Petsc, SimpleCommunicator)> {
+    let universe = mortar::petsc::start_mpi()?;
+    let world = universe.world();
+    let (rank, size) = (world.rank(), world.size());
+    let loaded = load();
+    let first_failure = first_failing_rank(&world, loaded.is_err());
+    let input = match loaded {
+        Ok(s) if first_failure == size => s,
+        Ok(_) => return Err(Error::Reported),
+        Err(e) if rank == first_failure => return Err(ranked(e, rank, size)),
+        Err(_) => return Err(Error::Reported),
+    };
+    let mut petsc_args = vec![program];
+    petsc_args.extend(petsc_options);
+    match Petsc::start(universe, &petsc_args, options_file(&input)) {
+        Ok(p) => Ok((input, p, world)),
         Err(e) => Err(abort_unless_collective(&world, e, rank, size)),
     }
 }
@@ -226,23 +243,13 @@ fn study_command(
     program: String,
     petsc_options: Vec<String>,
 ) -> Result<()> {
-    let universe = mortar::petsc::start_mpi()?;
-    let world = universe.world();
+    let (study, petsc, world) = start(
+        || Study::load(path),
+        |s| s.petsc_options.as_deref(),
+        program,
+        petsc_options,
+    )?;
     let (rank, size) = (world.rank(), world.size());
-    let loaded = Study::load(path);
-    let first_failure = first_failing_rank(&world, loaded.is_err());
-    let study = match loaded {
-        Ok(s) if first_failure == size => s,
-        Ok(_) => return Err(Error::Reported),
-        Err(e) if rank == first_failure => return Err(ranked(e, rank, size)),
-        Err(_) => return Err(Error::Reported),
-    };
-    let mut petsc_args = vec![program];
-    petsc_args.extend(petsc_options);
-    let petsc = match Petsc::start(universe, &petsc_args, study.petsc_options.as_deref()) {
-        Ok(p) => p,
-        Err(e) => return Err(abort_unless_collective(&world, e, rank, size)),
-    };
     let out_dir = out.unwrap_or_else(|| default_out(&study.name));
     let result = study.run(&petsc, &RunOptions { out_dir, quiet });
     if rank == 0 {

@@ -67,6 +67,7 @@ use serde::Deserialize;
 
 use crate::case::Scene;
 use crate::error::{Error, Result};
+use crate::io::case_file::one_line;
 use crate::io::output::{write_atomic, Summary};
 use crate::io::plot;
 use crate::petsc::Petsc;
@@ -656,15 +657,6 @@ fn set_in_value(
             other.type_str()
         )),
     }
-}
-
-/// Folds a multi-line parser message into one line.
-fn one_line(s: &str) -> String {
-    s.lines()
-        .map(str::trim)
-        .filter(|l| !l.is_empty() && !l.chars().all(|c| c == '|' || c == '^' || c == ' '))
-        .collect::<Vec<_>>()
-        .join(" ")
 }
 
 #[cfg(test)]

@@ -405,7 +405,7 @@ impl CaseFile {
 }
 
 /// Folds a multi-line parser message (toml shows the offending line) into one line.
-fn one_line(s: &str) -> String {
+pub(crate) fn one_line(s: &str) -> String {
     s.lines()
         .map(str::trim)
         .filter(|l| !l.is_empty() && !l.chars().all(|c| c == '|' || c == '^' || c == ' '))
