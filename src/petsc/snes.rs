@@ -216,6 +216,17 @@ impl Snes {
         ))
     }
 
+    /// Makes the next solves take at least one Newton iteration even when the first residual
+    /// is already below the tolerances (after an Uzawa update, say).
+    pub fn force_iteration(&mut self, on: bool) -> Result<()> {
+        let flag = if on {
+            p::PetscBool::PETSC_TRUE
+        } else {
+            p::PetscBool::PETSC_FALSE
+        };
+        chk!(SNESSetForceIteration(self.raw, flag))
+    }
+
     /// For a constant tangent already assembled in the Jacobian matrix (and factorized by
     /// [`Snes::linear_solve`]): never recompute it (`SNESSetLagJacobian(-1)`, persisting).
     pub fn reuse_jacobian(&mut self) -> Result<()> {
@@ -239,7 +250,8 @@ impl Snes {
     }
 
     /// Null pivots MUMPS met in the last factorization (`INFOG(28)`, with null-pivot detection
-    /// on, as by default), or `None` when the linear solver is not a MUMPS factorization.
+    /// on, as by default), or `None` when the linear solver is not a MUMPS factorization or
+    /// nothing was factorized yet. The predictor's solves count: they use this solver's KSP.
     pub fn null_pivots(&self) -> Result<Option<usize>> {
         let mut ksp: p::KSP = std::ptr::null_mut();
         chk!(SNESGetKSP(self.raw, &mut ksp))?;
@@ -266,7 +278,10 @@ impl Snes {
             return Ok(None);
         }
         let mut factor: p::Mat = std::ptr::null_mut();
-        chk!(PCFactorGetMatrix(pc, &mut factor))?;
+        if chk!(PCFactorGetMatrix(pc, &mut factor)).is_err() {
+            // Nothing factorized yet (no linear solve so far): nothing to report.
+            return Ok(None);
+        }
         let mut n: PetscInt = 0;
         chk!(MatMumpsGetInfog(factor, 28, &mut n))?;
         Ok(Some(n.max(0) as usize))

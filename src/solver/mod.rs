@@ -29,7 +29,7 @@ use mpi::collective::{CommunicatorCollectives, Root, SystemOperation};
 use mpi::topology::Communicator;
 
 use crate::case::Scene;
-use crate::contact::tying::TiedInterfaces;
+use crate::contact::tying::{Augmented, TiedInterfaces};
 use crate::dofs::DofMap;
 use crate::error::{Error, Result};
 use crate::io::output::{StepRecord, Summary};
@@ -150,6 +150,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         let dt_nominal = 1.0 / scene.steps as f64;
         let dt_min = dt_nominal * 0.5f64.powi(scene.max_cuts as i32) * (1.0 - 1e-12);
         let (mut t, mut dt, mut cuts_in_row, mut step) = (0.0f64, dt_nominal, 0usize, 0usize);
+        let mut uzawa_capped = 0usize;
         let mut x_prev = x.duplicate()?;
         while t < 1.0 - 1e-12 {
             let t_new = if t + dt > 1.0 - 1e-9 { 1.0 } else { t + dt };
@@ -170,7 +171,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
             let assembly_stage = phases.stage("assembly");
             let solve_guard = phases.push("solve")?;
             let multipliers = model.tying.multipliers();
-            let (mut augmentations, mut newton_total) = (0usize, 0usize);
+            let (mut augmentations, mut newton_total, mut linear_total) = (0usize, 0usize, 0usize);
             let outcome = loop {
                 let outcome = {
                     let model = &model;
@@ -195,29 +196,42 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                     snes.solve(&mut x, &mut jac, &mut residual, &mut jacobian)?
                 };
                 newton_total += outcome.iterations;
+                linear_total += outcome.linear_iterations;
                 if !outcome.converged || model.tying.is_empty() {
                     break outcome;
                 }
                 // Uzawa: augment the tied interfaces until their gaps meet the tolerance.
                 state.borrow_mut().load(scene, &dofs, &x)?;
                 let s = state.borrow();
-                if !model.tying.needs_augmentation(&s.u, augmentations, &world) {
-                    break outcome;
+                match model.tying.augment(&s.u, augmentations, &world) {
+                    Augmented::Converged => break outcome,
+                    Augmented::CapReached => {
+                        uzawa_capped += 1;
+                        if rank == 0 {
+                            eprintln!(
+                                "mortar: warning: step {} (load {t_new}): an interface is still \
+                                 above its uzawa_tol after uzawa_max = {augmentations} \
+                                 augmentations (relative gap {:.3e})",
+                                step + 1,
+                                model.tying.max_relative_gap(&s.u, &world)
+                            );
+                        }
+                        break outcome;
+                    }
+                    Augmented::Updated => augmentations += 1,
                 }
-                model.tying.augment(&s.u);
-                augmentations += 1;
+                // The new multipliers change the residual by little once the gap is small:
+                // still take one Newton step, so that the displacements follow.
+                snes.force_iteration(true)?;
             };
+            snes.force_iteration(false)?;
             drop(solve_guard);
             let assembly = state.borrow().assembly_seconds;
             let solve_seconds = t_solve.elapsed().as_secs_f64();
             phases.add("assembly", assembly);
             phases.add("solve", (solve_seconds - assembly).max(0.0));
-            // (Only after a linear solve: before one there is no factorization to ask.)
-            let null_pivots = if outcome.linear_iterations > 0 {
-                snes.null_pivots()?
-            } else {
-                None
-            };
+            // (The predictor's factorization counts: a linear scene may need no Newton step.)
+            let null_pivots = snes.null_pivots()?;
             if let Some(n) = null_pivots.filter(|&n| n > 0) {
                 return Err(Error::Solve(format!(
                     "the tangent stiffness is singular ({n} null pivot(s) at load {t_new}): a \
@@ -278,7 +292,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                 newton_its: newton_total,
                 augmentations,
                 cuts: cuts_in_row,
-                linear_its: outcome.linear_iterations,
+                linear_its: linear_total,
                 residual: final_res,
                 reactions: &reactions,
                 seconds: [
@@ -300,7 +314,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
             say(format!(
                 "  step {step} load {t:.6}: {newton_total} Newton its{}, |F| {final_res:.3e}, {} linear its{}, {:.2} s",
                 if augmentations > 0 { format!(" ({augmentations} Uzawa augmentations)") } else { String::new() },
-                outcome.linear_iterations,
+                linear_total,
                 if cuts_in_row > 0 { format!(", after {cuts_in_row} cut(s)") } else { String::new() },
                 solve_seconds
             ));
@@ -339,6 +353,9 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
             }
         }
         if !model.tying.is_empty() {
+            summary
+                .metrics
+                .insert("uzawa_capped_steps".into(), uzawa_capped as f64);
             let gap = model.tying.max_relative_gap(&s.u, &world);
             summary.metrics.insert("max_relative_gap".into(), gap);
             let most = summary

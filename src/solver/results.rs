@@ -229,9 +229,11 @@ impl Results {
     }
 
     /// Writes each tied interface (every pass) as its own VTU, with a PVD per interface and
-    /// pass (rank 0): the faces that carried the tractions, with point fields `traction` (t_A),
-    /// `gap` (g_A / a_A), `a` (a_A) at the traction nodes (zero at the others) and `normal`
-    /// (the averaged unit face normal at each node, reference configuration).
+    /// pass (rank 0): the faces that carried the tractions (reference coordinates), with point
+    /// fields `displacement`, `traction` (t_A; at nodes that carry none, such as the mid-nodes
+    /// under scheme 2, the traction interpolated by the scheme's functions), `weighted_gap`
+    /// (g_A), `gap` (g_A / a_A), `a` (a_A; zero where no traction unknown) and `normal` (the
+    /// averaged unit face normal at each node).
     pub fn write_interfaces(
         &mut self,
         scene: &Scene,
@@ -252,10 +254,12 @@ impl Results {
                 write_interface_piece(
                     &self.dir.join(&file),
                     scene,
+                    tied.scheme,
                     &pass.secondary,
                     &pass.rows,
                     &traction,
                     &gap,
+                    u,
                 )?;
                 let series = self.interface_pvd.entry(stem.clone()).or_default();
                 series.push((t, file));
@@ -334,41 +338,69 @@ impl Results {
 }
 
 /// One interface side as a VTU piece (see [`Results::write_interfaces`]).
+#[allow(clippy::too_many_arguments)]
 fn write_interface_piece(
     path: &Path,
     scene: &Scene,
+    scheme: crate::contact::mortar::TractionScheme,
     faces: &[crate::mesh::FaceRef],
     rows: &[crate::contact::tying::Row],
     traction: &[[f64; 3]],
     gap: &[[f64; 3]],
+    u: &[f64],
 ) -> Result<()> {
     let mesh = &scene.mesh;
+    let row_of: BTreeMap<usize, usize> = rows
+        .iter()
+        .enumerate()
+        .map(|(r, row)| (row.node, r))
+        .collect();
     let mut index: BTreeMap<usize, usize> = BTreeMap::new();
     let (mut types, mut conn, mut offsets) = (Vec::new(), Vec::new(), Vec::new());
     let mut normal_sum: Vec<[f64; 3]> = Vec::new();
+    // Tractions interpolated at nodes without a traction unknown: sum and count per point.
+    let mut interpolated: Vec<([f64; 3], f64)> = Vec::new();
+    let mut phi = Vec::new();
     for &f in faces {
         let nodes = mesh.face_nodes(f);
         let kind = mesh.face_type(f);
         let x: Vec<[f64; 3]> = nodes.iter().map(|&n| mesh.coords[n]).collect();
-        for (j, (&n, xi)) in nodes.iter().zip(kind.node_coords()).enumerate() {
+        let carriers = crate::contact::mortar::traction_nodes(kind, scheme).unwrap_or_default();
+        for (&n, xi) in nodes.iter().zip(kind.node_coords()) {
             let next = index.len();
             let k = *index.entry(n).or_insert(next);
             if k == normal_sum.len() {
                 normal_sum.push([0.0; 3]);
+                interpolated.push(([0.0; 3], 0.0));
             }
             let (nrm, _) = crate::fe::face_normal(kind, &x, xi);
             for c in 0..3 {
                 normal_sum[k][c] += nrm[c];
             }
-            let _ = j;
+            if !row_of.contains_key(&n)
+                && scheme != crate::contact::mortar::TractionScheme::PiecewiseLinear
+            {
+                crate::contact::mortar::traction_shape(kind, scheme, 0, xi, &mut phi);
+                let acc = &mut interpolated[k];
+                for (p, &local) in phi.iter().zip(&carriers) {
+                    if let Some(&r) = row_of.get(&nodes[local]) {
+                        for (a, t) in acc.0.iter_mut().zip(traction[r]) {
+                            *a += p * t;
+                        }
+                    }
+                }
+                acc.1 += 1.0;
+            }
             conn.push(k);
         }
         offsets.push(conn.len());
         types.push(kind.vtk_cell_type());
     }
     let mut points = vec![[0.0; 3]; index.len()];
+    let mut disp = vec![0.0; 3 * index.len()];
     for (&n, &k) in &index {
         points[k] = mesh.coords[n];
+        disp[3 * k..3 * k + 3].copy_from_slice(&u[3 * n..3 * n + 3]);
     }
     let normals: Vec<f64> = normal_sum
         .iter()
@@ -379,15 +411,27 @@ fn write_interface_piece(
             [v[0] / l, v[1] / l, v[2] / l]
         })
         .collect();
-    let (mut t_field, mut g_field, mut a_field) = (
-        vec![0.0; 3 * points.len()],
-        vec![0.0; 3 * points.len()],
-        vec![0.0; points.len()],
+    let n = points.len();
+    let (mut t_field, mut wg_field, mut g_field, mut a_field) = (
+        vec![0.0; 3 * n],
+        vec![0.0; 3 * n],
+        vec![0.0; 3 * n],
+        vec![0.0; n],
     );
+    for (k, (sum, count)) in interpolated.iter().enumerate() {
+        if *count > 0.0 {
+            for c in 0..3 {
+                t_field[3 * k + c] = sum[c] / count;
+            }
+        }
+    }
     for (r, row) in rows.iter().enumerate() {
         if let Some(&k) = index.get(&row.node) {
             t_field[3 * k..3 * k + 3].copy_from_slice(&traction[r]);
             g_field[3 * k..3 * k + 3].copy_from_slice(&gap[r]);
+            for c in 0..3 {
+                wg_field[3 * k + c] = gap[r][c] * row.area;
+            }
             a_field[k] = row.area;
         }
     }
@@ -398,9 +442,19 @@ fn write_interface_piece(
         offsets: &offsets,
         point_data: vec![
             Field {
+                name: "displacement",
+                components: 3,
+                values: &disp,
+            },
+            Field {
                 name: "traction",
                 components: 3,
                 values: &t_field,
+            },
+            Field {
+                name: "weighted_gap",
+                components: 3,
+                values: &wg_field,
             },
             Field {
                 name: "gap",
