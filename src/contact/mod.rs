@@ -7,7 +7,12 @@
 //!   mortar weights.
 //! - [`tying`]: mesh tying of dissimilar meshes (the vector weighted-gap constraint) by penalty
 //!   plus Uzawa augmented Lagrangian.
+//! - [`normals`]: averaged nodal normals of a contact surface and their linearization.
+//! - [`law`]: the pointwise laws of frictional contact (normal pressure, Coulomb return map,
+//!   traction transport, Uzawa updates) with their derivatives: physics only.
 
+pub mod law;
 pub mod mortar;
+pub mod normals;
 pub mod search;
 pub mod tying;
