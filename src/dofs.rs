@@ -59,17 +59,7 @@ impl DofMap {
         constrained: &[bool],
     ) -> DofMap {
         let n = mesh.num_nodes();
-        let mut node_owner = vec![usize::MAX; n];
-        for (e, &r) in element_rank.iter().enumerate() {
-            for &v in mesh.element_nodes(e) {
-                node_owner[v] = node_owner[v].min(r);
-            }
-        }
-        for o in node_owner.iter_mut() {
-            if *o == usize::MAX {
-                *o = 0;
-            }
-        }
+        let node_owner = crate::mesh::partition::node_owners(mesh, &element_rank, ranks);
         let mut global = vec![-1 as PetscInt; 3 * n];
         let mut next: PetscInt = 0;
         let (mut owned_start, mut owned_count) = (0, 0);

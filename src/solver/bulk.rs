@@ -15,7 +15,7 @@ use nalgebra::DMatrix;
 use crate::case::Scene;
 use crate::dofs::DofMap;
 use crate::error::{Error, Result};
-use crate::fe::{quadrature::Rule2, ElementType, FaceType};
+use crate::fe::{quadrature::Rule2, FaceType};
 use crate::petsc::{Matrix, PetscInt, Vector};
 use crate::solid::{self, ElementGeometry};
 
@@ -228,18 +228,29 @@ impl Bulk {
         t: f64,
         fe: &mut [f64],
     ) {
+        // The consistent load is linear in b: sum the body's forces, integrate once, on the
+        // stack (this runs for every element in every residual).
         let body = scene.mesh.body[e];
+        let mut v = [0.0; 3];
+        let mut any = false;
         for b in scene
             .body_forces
             .iter()
             .filter(|b| b.bodies.contains(&body))
         {
             let s = scene.curves[b.curve].eval(t);
-            let v = [b.value[0] * s, b.value[1] * s, b.value[2] * s];
-            let mut fb = vec![0.0; fe.len()];
-            solid::body_force(geom, v, &mut fb);
-            fe.iter_mut().zip(&fb).for_each(|(a, b)| *a -= b);
+            for (vc, bc) in v.iter_mut().zip(b.value) {
+                *vc += bc * s;
+            }
+            any = true;
         }
+        if !any {
+            return;
+        }
+        let mut buffer = [0.0; 3 * solid::MAX_NODES];
+        let fb = &mut buffer[..fe.len()];
+        solid::body_force(geom, v, fb);
+        fe.iter_mut().zip(fb.iter()).for_each(|(a, b)| *a -= b);
     }
 
     /// Coordinates of a loaded face (current for a follower load, reference for a dead load)
@@ -285,12 +296,4 @@ fn scatter_add(out: &mut [f64], nodes: &[usize], fe: &[f64]) {
             out[3 * v + c] += fe[3 * a + c];
         }
     }
-}
-
-/// The element types present, for messages.
-pub fn element_types(scene: &Scene) -> Vec<ElementType> {
-    let mut t: Vec<ElementType> = scene.mesh.types.clone();
-    t.sort();
-    t.dedup();
-    t
 }

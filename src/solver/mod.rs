@@ -125,7 +125,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         snes.freeze_jacobian()?;
     }
     let mut tangent_ready = false;
-    let mut results = Results::new(scene, &dofs, &opts.out_dir, rank, ranks)?;
+    let mut results = Results::new(scene, &opts.out_dir, rank, ranks)?;
     drop(setup_guard);
     phases.add("setup", t_setup.elapsed().as_secs_f64());
     say(format!(
@@ -276,7 +276,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
             let output_guard = phases.push("output")?;
             state.borrow_mut().load(scene, &dofs, &x)?;
             let s = state.borrow();
-            let reactions = results.reactions(scene, &dofs, &model, &s.u, t, &world)?;
+            let reactions = results.reactions(scene, &model, &s.u, t, &world)?;
             let write_vtu = scene.vtu_every > 0 && (step % scene.vtu_every == 0 || t >= 1.0);
             if write_vtu {
                 results.write_step(scene, &dofs, &model, &s.u, step, t, &world)?;

@@ -60,13 +60,7 @@ const CELL_FIELDS: [(&str, usize); 3] = [("cauchy_stress", 9), ("von_mises", 1),
 
 impl Results {
     /// Creates the output folders (rank 0) and the history columns.
-    pub fn new(
-        scene: &Scene,
-        _dofs: &DofMap,
-        dir: &Path,
-        rank: usize,
-        ranks: usize,
-    ) -> Result<Results> {
+    pub fn new(scene: &Scene, dir: &Path, rank: usize, ranks: usize) -> Result<Results> {
         std::fs::create_dir_all(dir.join("vtu")).map_err(|e| Error::io(dir, e))?;
         let reaction_sets: Vec<(String, Vec<usize>)> = scene
             .reaction_sets
@@ -111,7 +105,6 @@ impl Results {
     pub fn reactions(
         &self,
         scene: &Scene,
-        _dofs: &DofMap,
         model: &Model,
         u: &[f64],
         t: f64,
