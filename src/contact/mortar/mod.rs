@@ -24,10 +24,12 @@
 //! the traction scheme is validated once with [`traction_nodes`], not in [`integrate_pair`].
 
 pub mod clip;
+pub mod linearize;
 pub mod pair;
 pub mod segments;
 
 pub use clip::{clip_convex, is_convex_ccw, pallets, polygon_area, Clipped};
+pub use linearize::{integrate_pair_linearized, LinearizedWeights};
 pub use pair::{
     integrate_pair, FaceGeom, IntegrationOptions, PairWeights, RejectStats, OPPOSED_NORMALS_COSINE,
 };
