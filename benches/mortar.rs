@@ -5,10 +5,14 @@
 //! integrated with `integrate_pair` (projection, clipping, pallets, quadrature, inverse maps,
 //! weights). Quad4-Quad4 with scheme 2 and the default degree 4; Quad9-Quad9 with scheme 2 and
 //! degree 8 (each Quad9 face is 4 sub-segments, so a face pair is 16 sub-segment pairs).
+//!
+//! Group `mortar_pair_linearized`: the same pairs with `integrate_pair_linearized` (the weights
+//! and their exact derivatives with respect to all node coordinates, the consistent tangent).
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use mortar::contact::mortar::{
-    integrate_pair, FaceGeom, IntegrationOptions, RejectStats, TractionScheme,
+    integrate_pair, integrate_pair_linearized, FaceGeom, IntegrationOptions, RejectStats,
+    TractionScheme,
 };
 use mortar::fe::FaceType;
 
@@ -32,16 +36,24 @@ fn face(kind: FaceType, angle: f64, shift: [f64; 2], flip: bool) -> Vec<[f64; 3]
         .collect()
 }
 
+/// The benchmarked pair of `kind`: secondary, primary and options.
+fn pair(kind: FaceType, degree: usize) -> (Vec<[f64; 3]>, Vec<[f64; 3]>, IntegrationOptions) {
+    let sec = face(kind, 0.0, [0.0, 0.0], false);
+    let pri = face(kind, 10f64.to_radians(), [0.33, 0.33], true);
+    let opts = IntegrationOptions {
+        scheme: TractionScheme::Corners,
+        degree,
+    };
+    (sec, pri, opts)
+}
+
+const CASES: [(FaceType, usize); 2] = [(FaceType::Quad4, 4), (FaceType::Quad9, 8)];
+
 fn bench_pairs(c: &mut Criterion) {
     let mut group = c.benchmark_group("mortar_pair");
     group.throughput(Throughput::Elements(1));
-    for (kind, degree) in [(FaceType::Quad4, 4), (FaceType::Quad9, 8)] {
-        let sec = face(kind, 0.0, [0.0, 0.0], false);
-        let pri = face(kind, 10f64.to_radians(), [0.33, 0.33], true);
-        let opts = IntegrationOptions {
-            scheme: TractionScheme::Corners,
-            degree,
-        };
+    for (kind, degree) in CASES {
+        let (sec, pri, opts) = pair(kind, degree);
         let mut stats = RejectStats::default();
         let w = integrate_pair(
             &FaceGeom { kind, x: &sec },
@@ -65,5 +77,33 @@ fn bench_pairs(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_pairs);
+fn bench_linearized_pairs(c: &mut Criterion) {
+    let mut group = c.benchmark_group("mortar_pair_linearized");
+    group.throughput(Throughput::Elements(1));
+    for (kind, degree) in CASES {
+        let (sec, pri, opts) = pair(kind, degree);
+        let mut stats = RejectStats::default();
+        let w = integrate_pair_linearized(
+            &FaceGeom { kind, x: &sec },
+            &FaceGeom { kind, x: &pri },
+            &opts,
+            &mut stats,
+        );
+        assert!(w.area > 0.1, "{kind:?}: overlap area {}", w.area);
+        group.bench_function(kind.name(), |b| {
+            b.iter(|| {
+                let mut stats = RejectStats::default();
+                integrate_pair_linearized(
+                    &FaceGeom { kind, x: &sec },
+                    &FaceGeom { kind, x: &pri },
+                    &opts,
+                    &mut stats,
+                )
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_pairs, bench_linearized_pairs);
 criterion_main!(benches);

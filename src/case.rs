@@ -81,9 +81,19 @@ pub struct BodyForce {
     pub curve: usize,
 }
 
+/// What an interface enforces.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum InterfaceKind {
+    /// The sides move together (reference weights, a linear constraint).
+    Tied,
+    /// Unilateral frictional contact (current weights).
+    Contact,
+}
+
 /// A validated interface between two face sets.
 #[derive(Clone, Debug)]
 pub struct Interface {
+    pub kind: InterfaceKind,
     pub name: String,
     /// Face set names and faces of the two sides.
     pub secondary_set: String,
@@ -98,6 +108,13 @@ pub struct Interface {
     pub uzawa_tol: f64,
     pub uzawa_max: usize,
     pub quadrature_degree: Option<usize>,
+    /// Contact: Coulomb coefficient mu (0 for tied interfaces).
+    pub friction: f64,
+    /// Contact: tangential penalty factor alpha_T.
+    pub tangential_penalty: f64,
+    /// Contact: penalty growth factor (1 = off) and cap (multiple of the initial penalties).
+    pub penalty_growth: f64,
+    pub penalty_growth_cap: f64,
 }
 
 /// The exact solution a run is measured against.
@@ -111,6 +128,12 @@ pub enum Verification {
     },
     /// u = G X everywhere.
     UniformStrain { gradient: [[f64; 3]; 3] },
+    /// Contact patch test: a uniform Cauchy stress everywhere and the contact pressure p0 at
+    /// every contact node.
+    ContactPatch {
+        stress: [[f64; 3]; 3],
+        pressure: f64,
+    },
 }
 
 /// A validated scene.
@@ -131,8 +154,11 @@ pub struct Scene {
     pub constraints: Vec<Constraint>,
     pub pressures: Vec<PressureLoad>,
     pub body_forces: Vec<BodyForce>,
-    /// Tied interfaces.
+    /// Tied and contact interfaces.
     pub interfaces: Vec<Interface>,
+    /// `(node, axis)` of every symmetry-plane constraint (contact normals drop those
+    /// components).
+    pub symmetry: Vec<(usize, usize)>,
     /// Sets whose reactions are reported, with their constrained dofs.
     pub reaction_sets: BTreeMap<String, Vec<usize>>,
     /// Element quadrature degree, if the scene overrides the per-type default.
@@ -199,6 +225,7 @@ impl Scene {
         let mut by_dof: BTreeMap<usize, Constraint> = BTreeMap::new();
         let mut reaction_sets = BTreeMap::new();
         let zero_curve = add_curve(&LoadCurveSpec::default(), String::new())?;
+        let mut symmetry = Vec::new();
         for (i, s) in file.symmetry.iter().enumerate() {
             let c = axis(&s.normal).ok_or_else(|| {
                 err(format!(
@@ -210,6 +237,7 @@ impl Scene {
                 .nodes_of_set(&s.set)
                 .map_err(|e| err(format!("symmetry[{i}].set: {e}")))?;
             let dofs: Vec<usize> = nodes.iter().map(|&v| 3 * v + c).collect();
+            symmetry.extend(nodes.iter().map(|&v| (v, c)));
             for &d in &dofs {
                 by_dof.insert(
                     d,
@@ -381,6 +409,7 @@ impl Scene {
             pressures,
             body_forces,
             interfaces,
+            symmetry,
             reaction_sets,
             quadrature_degree: file.quadrature_degree,
             steps: file.steps.count,
@@ -393,12 +422,25 @@ impl Scene {
     }
 
     /// True when the tangent never changes: linear-elastic materials, dead pressures only, and
-    /// (tied) interfaces with reference weights. The solver then factorizes once per run.
+    /// no contact (tied interfaces use reference weights). The solver then factorizes once per
+    /// run.
     pub fn is_linear(&self) -> bool {
         self.materials
             .iter()
             .all(|m| matches!(m, Material::LinearElastic { .. }))
             && self.pressures.iter().all(|p| !p.follower)
+            && self
+                .interfaces
+                .iter()
+                .all(|i| i.kind == InterfaceKind::Tied)
+    }
+
+    /// True when a contact interface has friction (its residual is only piecewise smooth: the
+    /// solver then backtracks Newton steps).
+    pub fn has_friction(&self) -> bool {
+        self.interfaces
+            .iter()
+            .any(|i| i.kind == InterfaceKind::Contact && i.friction > 0.0)
     }
 
     /// `constrained[3 * node + c]` for every dof.
@@ -417,11 +459,25 @@ fn build_interface(
     mesh: &Mesh,
 ) -> std::result::Result<Interface, String> {
     let key = format!("interface[{i}]");
-    if spec.kind != "tied" {
-        return Err(format!(
-            "{key}.kind = \"{}\": must be \"tied\" (contact comes with the contact issue)",
-            spec.kind
-        ));
+    let kind = match spec.kind.as_str() {
+        "tied" => InterfaceKind::Tied,
+        "contact" => InterfaceKind::Contact,
+        k => {
+            return Err(format!(
+                "{key}.kind = \"{k}\": must be \"tied\" or \"contact\""
+            ))
+        }
+    };
+    if kind == InterfaceKind::Tied {
+        let contact_only = [
+            ("friction", spec.friction.is_some()),
+            ("tangential_penalty", spec.tangential_penalty.is_some()),
+            ("penalty_growth", spec.penalty_growth.is_some()),
+            ("penalty_growth_cap", spec.penalty_growth_cap.is_some()),
+        ];
+        if let Some((k, _)) = contact_only.iter().find(|(_, given)| *given) {
+            return Err(format!("{key}.{k}: only for kind = \"contact\""));
+        }
     }
     let side = |name: &str, what: &str| -> std::result::Result<Vec<FaceRef>, String> {
         let faces = mesh
@@ -457,18 +513,56 @@ fn build_interface(
                 .map_err(|e| format!("{key}.scheme on the {what} side: {e}"))?;
         }
     }
-    if !(spec.penalty > 0.0 && spec.penalty.is_finite()) {
-        return Err(format!("{key}.penalty = {}: must be > 0", spec.penalty));
-    }
-    if !(spec.uzawa_tol > 0.0 && spec.uzawa_tol.is_finite()) {
-        return Err(format!("{key}.uzawa_tol = {}: must be > 0", spec.uzawa_tol));
-    }
+    let contact = kind == InterfaceKind::Contact;
+    let positive = |name: &str, v: f64| -> std::result::Result<f64, String> {
+        if v > 0.0 && v.is_finite() {
+            Ok(v)
+        } else {
+            Err(format!("{key}.{name} = {v}: must be finite and > 0"))
+        }
+    };
+    let penalty = positive(
+        "penalty",
+        spec.penalty.unwrap_or(if contact { 100.0 } else { 1000.0 }),
+    )?;
+    let uzawa_tol = positive(
+        "uzawa_tol",
+        spec.uzawa_tol.unwrap_or(if contact { 1e-6 } else { 1e-12 }),
+    )?;
     if let Some(q) = spec.quadrature_degree {
         if !(1..=10).contains(&q) {
             return Err(format!("{key}.quadrature_degree = {q}: must be in 1..=10"));
         }
     }
+    let friction = spec.friction.unwrap_or(0.0);
+    if !(friction >= 0.0 && friction.is_finite()) {
+        return Err(format!(
+            "{key}.friction = {friction}: must be finite and >= 0"
+        ));
+    }
+    let tangential_penalty = positive(
+        "tangential_penalty",
+        spec.tangential_penalty.unwrap_or(penalty),
+    )?;
+    let penalty_growth = spec.penalty_growth.unwrap_or(1.0);
+    if !(penalty_growth >= 1.0 && penalty_growth.is_finite()) {
+        return Err(format!(
+            "{key}.penalty_growth = {penalty_growth}: must be finite and >= 1"
+        ));
+    }
+    let penalty_growth_cap = spec.penalty_growth_cap.unwrap_or(100.0);
+    if !(penalty_growth_cap >= 1.0 && penalty_growth_cap.is_finite()) {
+        return Err(format!(
+            "{key}.penalty_growth_cap = {penalty_growth_cap}: must be finite and >= 1"
+        ));
+    }
+    let uzawa_max = spec.uzawa_max.unwrap_or(match (kind, spec.passes) {
+        (InterfaceKind::Contact, _) => 10,
+        (InterfaceKind::Tied, 2) => 0,
+        (InterfaceKind::Tied, _) => 50,
+    });
     Ok(Interface {
+        kind,
         name: spec.name.clone(),
         secondary_set: spec.secondary.clone(),
         secondary,
@@ -476,12 +570,14 @@ fn build_interface(
         primary,
         scheme,
         passes: spec.passes,
-        penalty: spec.penalty,
-        uzawa_tol: spec.uzawa_tol,
-        uzawa_max: spec
-            .uzawa_max
-            .unwrap_or(if spec.passes == 2 { 0 } else { 50 }),
+        penalty,
+        uzawa_tol,
+        uzawa_max,
         quadrature_degree: spec.quadrature_degree,
+        friction,
+        tangential_penalty,
+        penalty_growth,
+        penalty_growth_cap,
     })
 }
 
@@ -554,8 +650,14 @@ fn build_verification(
                 .ok_or("verification: uniform_strain needs gradient")?;
             Ok(Verification::UniformStrain { gradient: g })
         }
+        "contact_patch" => match (v.stress, v.pressure) {
+            (Some(stress), Some(pressure)) if pressure > 0.0 && pressure.is_finite() => {
+                Ok(Verification::ContactPatch { stress, pressure })
+            }
+            _ => Err("verification: contact_patch needs stress and pressure > 0".into()),
+        },
         k => Err(format!(
-            "verification.kind = \"{k}\": must be lame_sphere or uniform_strain"
+            "verification.kind = \"{k}\": must be lame_sphere, uniform_strain or contact_patch"
         )),
     }
 }

@@ -19,6 +19,13 @@
 //!
 //! u = G X: the largest nodal displacement error relative to the largest |G X|, and the largest
 //! stress error at any quadrature point relative to |sigma(I + G)| (Frobenius norms).
+//!
+//! # Contact patch test
+//!
+//! A uniform Cauchy stress `sigma` everywhere: `max_rel_stress_error` is the largest
+//! `|sigma_h - sigma|` at any quadrature point relative to `|sigma|` (Frobenius). The contact
+//! figures (every nodal pressure equal to p0, the contact forces summing to zero) come from the
+//! contact interfaces (`solver::results`).
 
 use nalgebra::{Matrix3, Vector3};
 
@@ -117,6 +124,18 @@ pub fn local_figures(
             out.maxima.push(("stress_error_abs", ds));
             out.maxima.push(("stress_scale", smax));
         }
+        Verification::ContactPatch { stress, .. } => {
+            let exact = Matrix3::from_row_slice(&stress.concat());
+            let mut ds = 0.0f64;
+            for (e, geom) in elements {
+                let mat = &scene.materials[scene.mesh.body[*e]];
+                gather_nodes(u, scene.mesh.element_nodes(*e), &mut ue);
+                for_each_point(geom, &ue, |_, f, _| {
+                    ds = ds.max((mat.cauchy(f) - exact).norm() / exact.norm());
+                });
+            }
+            out.maxima.push(("rel_stress_error", ds));
+        }
     }
     out
 }
@@ -141,6 +160,9 @@ pub fn metrics(
     }
     if let (Some(d), Some(s)) = (maxima.get("stress_error_abs"), maxima.get("stress_scale")) {
         m.push(("max_stress_error".to_string(), d / s.max(f64::MIN_POSITIVE)));
+    }
+    if let Some(d) = maxima.get("rel_stress_error") {
+        m.push(("max_rel_stress_error".to_string(), *d));
     }
     m
 }

@@ -418,6 +418,36 @@ value = [0.0, 0.0, -1.0]
             "interface[0].scheme",
         ),
         check(
+            "contact_negative_friction",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\nfriction = -0.1\n"),
+            "interface[0].friction",
+        ),
+        check(
+            "contact_zero_penalty",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\npenalty = 0.0\n"),
+            "interface[0].penalty",
+        ),
+        check(
+            "contact_nan_tangential_penalty",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\ntangential_penalty = nan\n"),
+            "interface[0].tangential_penalty",
+        ),
+        check(
+            "contact_penalty_shrinking",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\npenalty_growth = 0.5\n"),
+            "interface[0].penalty_growth",
+        ),
+        check(
+            "friction_on_tied_interface",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"tied\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\nfriction = 0.3\n"),
+            "interface[0].friction",
+        ),
+        check(
+            "contact_patch_without_pressure",
+            valid_plus("[verification]\nkind = \"contact_patch\"\nstress = [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, -1.0]]\n"),
+            "contact_patch",
+        ),
+        check(
             "key_not_for_this_generator",
             valid_with("divisions = [1, 1, 1]", "divisions = [1, 1, 1]\nn_circ = 3"),
             "mesh[0].n_circ",

@@ -70,7 +70,7 @@ fn petsc_layer_boundary_behaviour() {
     assert_eq!(petsc.size(), 1);
     let mut x = Vector::new_mpi(N).unwrap();
     let mut jac = Matrix::new_aij(&diagonal_pattern()).unwrap();
-    let mut snes = Snes::new(tolerances(), "test").unwrap();
+    let mut snes = Snes::new(tolerances(), "test", "basic").unwrap();
 
     // 1. A converging solve.
     start(&mut x);

@@ -192,6 +192,21 @@ pub fn normal_pressure(lambda_n: f64, eps_n: f64, gh: f64) -> (f64, f64) {
     }
 }
 
+/// [`normal_pressure`] with a touching band: a node whose `lambda_n + eps_n gh` lies in
+/// `(-eps_n touch, 0]` (a gap within `touch` of closing, e.g. surfaces that touch to round-off)
+/// gets `p = 0` but the closed derivative `dp/dgh = eps_n`. Both values of the derivative are
+/// valid generalized derivatives at the kink; the closed one keeps a body that rests on another
+/// (touching, no load yet) from floating freely in the first Newton iteration. `touch = 0` is
+/// [`normal_pressure`].
+pub fn normal_pressure_touching(lambda_n: f64, eps_n: f64, gh: f64, touch: f64) -> (f64, f64) {
+    let x = lambda_n + eps_n * gh;
+    if x > -eps_n * touch {
+        (x.max(0.0), eps_n)
+    } else {
+        (0.0, 0.0)
+    }
+}
+
 /// Euclidean norm with scaling: no underflow for tiny components, no overflow for huge ones.
 fn norm3(v: &Vector3<f64>) -> f64 {
     let s = v.amax();

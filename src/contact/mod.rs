@@ -10,7 +10,10 @@
 //! - [`normals`]: averaged nodal normals of a contact surface and their linearization.
 //! - [`law`]: the pointwise laws of frictional contact (normal pressure, Coulomb return map,
 //!   traction transport, Uzawa updates) with their derivatives: physics only.
+//! - [`frictional`]: frictional contact on current mortar weights: gaps, slip, the laws,
+//!   Uzawa, the consistent tangent, and their assembly into the distributed system.
 
+pub mod frictional;
 pub mod law;
 pub mod mortar;
 pub mod normals;

@@ -61,7 +61,7 @@ use mpi::datatype::PartitionMut;
 use mpi::topology::{Communicator, SimpleCommunicator};
 use mpi::Count;
 
-use crate::case::{Interface, Scene};
+use crate::case::{Interface, InterfaceKind, Scene};
 use crate::contact::mortar::{
     integrate_pair, traction_nodes, FaceGeom, IntegrationOptions, RejectStats,
 };
@@ -155,7 +155,11 @@ impl TiedInterfaces {
     /// Integrates the mortar weights of every interface on the reference configuration.
     pub fn new(scene: &Scene, dofs: &DofMap, world: &SimpleCommunicator) -> Result<TiedInterfaces> {
         let mut interfaces = Vec::new();
-        for iface in &scene.interfaces {
+        for iface in scene
+            .interfaces
+            .iter()
+            .filter(|i| i.kind == InterfaceKind::Tied)
+        {
             let mut passes = Vec::new();
             let mut stats: BTreeMap<String, usize> = BTreeMap::new();
             for pass in 0..iface.passes {
@@ -614,7 +618,7 @@ fn build_rows(scene: &Scene, iface: &Interface, triplets: &[Triplet]) -> Vec<Row
 }
 
 /// Young's modulus of the body of each node (the first element around it).
-fn young_by_node(scene: &Scene) -> Vec<f64> {
+pub(crate) fn young_by_node(scene: &Scene) -> Vec<f64> {
     let mesh = &scene.mesh;
     let mut e = vec![0.0; mesh.num_nodes()];
     for el in (0..mesh.num_elements()).rev() {

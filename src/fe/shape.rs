@@ -35,8 +35,29 @@
 //! `x_,eta = sum_a dN_a/deta x_a`; the surface element is `dA = |x_,xi x x_,eta| dxi deta`, and the
 //! outward normal (faces are ordered counter-clockwise seen from outside) is
 //! `normalize(x_,xi x x_,eta)`.
+//!
+//! # Generic face kernels
+//!
+//! The face shape functions and the face geometry are written once, generically over the scalar
+//! ([`Scalar`]: `f64` or a forward-mode dual number of `num_dual`): [`FaceType::shape_at`],
+//! [`FaceType::shape_grad_at`], [`FaceType::shape_and_grad_at`], [`face_point_at`],
+//! [`face_tangents_at`], [`face_normal_at`]. With dual parent coordinates the values carry their
+//! `xi`-derivatives (and the gradients the second derivatives); with dual node coordinates the
+//! geometry carries its derivatives with respect to the nodes. The `f64` functions
+//! ([`FaceType::shape`], [`face_normal`], ...) are these instantiated at `f64`: the same code
+//! and the same floating-point operations as before the generalization. The mortar
+//! linearization ([`crate::contact::mortar::linearize`]) is their user in dual numbers.
+
+use num_dual::DualNum;
 
 use super::element::{ElementType, FaceType};
+
+/// The scalars of the generic face kernels (`*_at` functions): `f64`, or a forward-mode dual
+/// number over `f64` such as `num_dual::DualSVec64<N>`, so that one code gives the values and
+/// (with duals) their exact derivatives. The `f64` instances compile to the plain float code.
+pub trait Scalar: DualNum<Primitive = f64> + Copy {}
+
+impl<T: DualNum<Primitive = f64> + Copy> Scalar for T {}
 
 /// Parametric positions of the Hex27 nodes (the first 8 are the Hex8 nodes, the first 20 the Hex20
 /// nodes), in the VTK ordering of [`ElementType::node_coords`].
@@ -105,40 +126,45 @@ enum TensorFamily {
 }
 
 /// The 1D linear factor `(1 + s t) / 2` of the node at `s = +-1` and its derivative.
-fn linear_1d(s: f64, t: f64) -> (f64, f64) {
-    (0.5 * (1.0 + s * t), 0.5 * s)
+#[inline]
+fn linear_1d<T: Scalar>(s: f64, t: T) -> (T, T) {
+    ((t * s + 1.0) * 0.5, T::from(0.5 * s))
 }
 
 /// The 1D quadratic Lagrange factor of the node at `s` in `{-1, 0, 1}` and its derivative.
-fn quadratic_1d(s: f64, t: f64) -> (f64, f64) {
+#[inline]
+fn quadratic_1d<T: Scalar>(s: f64, t: T) -> (T, T) {
     if s < -0.5 {
-        (0.5 * t * (t - 1.0), t - 0.5)
+        (t * 0.5 * (t - 1.0), t - 0.5)
     } else if s > 0.5 {
-        (0.5 * t * (t + 1.0), t + 0.5)
+        (t * 0.5 * (t + 1.0), t + 0.5)
     } else {
-        (1.0 - t * t, -2.0 * t)
+        (T::from(1.0) - t * t, t * -2.0)
     }
 }
 
 /// Product of the entries of `v`, leaving out entry `skip` (no entry is left out if
 /// `skip >= D`).
-fn product_except<const D: usize>(v: &[f64; D], skip: usize) -> f64 {
+#[inline]
+fn product_except<T: Scalar, const D: usize>(v: &[T; D], skip: usize) -> T {
     v.iter()
         .enumerate()
         .filter(|&(i, _)| i != skip)
-        .map(|(_, x)| x)
+        .map(|(_, x)| *x)
         .product()
 }
 
 /// Value and gradient of `prod_i f_i(x_i)` given the factors `f_i` and their derivatives `df_i`.
-fn tensor_product<const D: usize>(f: [f64; D], df: [f64; D]) -> (f64, [f64; D]) {
+#[inline]
+fn tensor_product<T: Scalar, const D: usize>(f: [T; D], df: [T; D]) -> (T, [T; D]) {
     let value = product_except(&f, D);
     let grad = std::array::from_fn(|j| df[j] * product_except(&f, j));
     (value, grad)
 }
 
 /// Value and gradient of a serendipity shape function of the node at `s`.
-fn serendipity_node<const D: usize>(x: [f64; D], s: [f64; D]) -> (f64, [f64; D]) {
+#[inline]
+fn serendipity_node<T: Scalar, const D: usize>(x: [T; D], s: [f64; D]) -> (T, [T; D]) {
     match s.iter().position(|&si| si == 0.0) {
         None => serendipity_corner(x, s),
         Some(m) => serendipity_mid_edge(x, s, m),
@@ -146,36 +172,53 @@ fn serendipity_node<const D: usize>(x: [f64; D], s: [f64; D]) -> (f64, [f64; D])
 }
 
 /// Serendipity corner function `2^-d (prod p_i) (sum s_i x_i - (d - 1))`.
-fn serendipity_corner<const D: usize>(x: [f64; D], s: [f64; D]) -> (f64, [f64; D]) {
+#[inline]
+fn serendipity_corner<T: Scalar, const D: usize>(x: [T; D], s: [f64; D]) -> (T, [T; D]) {
     let d = D as f64;
     let scale = 0.5f64.powi(D as i32);
-    let p: [f64; D] = std::array::from_fn(|i| 1.0 + s[i] * x[i]);
-    let sx: f64 = (0..D).map(|i| s[i] * x[i]).sum();
-    let value = scale * product_except(&p, D) * (sx - (d - 1.0));
+    let p: [T; D] = std::array::from_fn(|i| x[i] * s[i] + 1.0);
+    let sx: T = (0..D).map(|i| x[i] * s[i]).sum();
+    let value = product_except(&p, D) * scale * (sx - (d - 1.0));
     let grad = std::array::from_fn(|j| {
-        scale * s[j] * product_except(&p, j) * (sx + s[j] * x[j] + 2.0 - d)
+        product_except(&p, j) * (scale * s[j]) * (sx + x[j] * s[j] + 2.0 - d)
     });
     (value, grad)
 }
 
 /// Serendipity mid-edge function `2^(1-d) (1 - x_m^2) prod_{i != m} p_i` of the node with
 /// `s_m = 0`.
-fn serendipity_mid_edge<const D: usize>(x: [f64; D], s: [f64; D], m: usize) -> (f64, [f64; D]) {
-    let f: [f64; D] = std::array::from_fn(|i| {
+#[inline]
+fn serendipity_mid_edge<T: Scalar, const D: usize>(
+    x: [T; D],
+    s: [f64; D],
+    m: usize,
+) -> (T, [T; D]) {
+    let f: [T; D] = std::array::from_fn(|i| {
         if i == m {
-            1.0 - x[i] * x[i]
+            T::from(1.0) - x[i] * x[i]
         } else {
-            0.5 * (1.0 + s[i] * x[i])
+            (x[i] * s[i] + 1.0) * 0.5
         }
     });
-    let df: [f64; D] = std::array::from_fn(|i| if i == m { -2.0 * x[i] } else { 0.5 * s[i] });
+    let df: [T; D] = std::array::from_fn(|i| {
+        if i == m {
+            x[i] * -2.0
+        } else {
+            T::from(0.5 * s[i])
+        }
+    });
     tensor_product(f, df)
 }
 
 /// Value and gradient of the shape function of the node at `s` of a hexahedron or quadrilateral.
-fn tensor_node<const D: usize>(family: TensorFamily, x: [f64; D], s: [f64; D]) -> (f64, [f64; D]) {
-    let factors = |one_d: fn(f64, f64) -> (f64, f64)| {
-        let fd: [(f64, f64); D] = std::array::from_fn(|i| one_d(s[i], x[i]));
+#[inline]
+fn tensor_node<T: Scalar, const D: usize>(
+    family: TensorFamily,
+    x: [T; D],
+    s: [f64; D],
+) -> (T, [T; D]) {
+    let factors = |one_d: fn(f64, T) -> (T, T)| {
+        let fd: [(T, T); D] = std::array::from_fn(|i| one_d(s[i], x[i]));
         tensor_product(fd.map(|v| v.0), fd.map(|v| v.1))
     };
     match family {
@@ -186,33 +229,42 @@ fn tensor_node<const D: usize>(family: TensorFamily, x: [f64; D], s: [f64; D]) -
 }
 
 /// Barycentric coordinate `L_k` of the `D`-simplex and its (constant) gradient.
-fn barycentric<const D: usize>(x: [f64; D], k: usize) -> (f64, [f64; D]) {
+#[inline]
+fn barycentric<T: Scalar, const D: usize>(x: [T; D], k: usize) -> (T, [T; D]) {
     if k == 0 {
-        (1.0 - x.iter().sum::<f64>(), [-1.0; D])
+        (
+            T::from(1.0) - x.iter().copied().sum::<T>(),
+            [T::from(-1.0); D],
+        )
     } else {
         (
             x[k - 1],
-            std::array::from_fn(|j| if j == k - 1 { 1.0 } else { 0.0 }),
+            std::array::from_fn(|j| T::from(if j == k - 1 { 1.0 } else { 0.0 })),
         )
     }
 }
 
 /// Value and gradient of shape function `a` of a linear (`edges` empty) or quadratic simplex whose
 /// mid-edge node `D + 1 + k` sits on `edges[k]`.
-fn simplex_node<const D: usize>(x: [f64; D], a: usize, edges: &[[usize; 2]]) -> (f64, [f64; D]) {
+#[inline]
+fn simplex_node<T: Scalar, const D: usize>(
+    x: [T; D],
+    a: usize,
+    edges: &[[usize; 2]],
+) -> (T, [T; D]) {
     let corners = D + 1;
     if edges.is_empty() {
         return barycentric(x, a);
     }
     if a < corners {
         let (l, dl) = barycentric(x, a);
-        (l * (2.0 * l - 1.0), dl.map(|g| (4.0 * l - 1.0) * g))
+        (l * (l * 2.0 - 1.0), dl.map(|g| (l * 4.0 - 1.0) * g))
     } else {
         let [i, j] = edges[a - corners];
         let (li, dli) = barycentric(x, i);
         let (lj, dlj) = barycentric(x, j);
-        let grad = std::array::from_fn(|k| 4.0 * (lj * dli[k] + li * dlj[k]));
-        (4.0 * li * lj, grad)
+        let grad = std::array::from_fn(|k| (lj * dli[k] + li * dlj[k]) * 4.0);
+        (li * 4.0 * lj, grad)
     }
 }
 
@@ -256,8 +308,9 @@ impl ElementType {
 }
 
 impl FaceType {
-    /// Value and parametric gradient of shape function `a` at `xi`.
-    fn shape_node(self, xi: [f64; 2], a: usize) -> (f64, [f64; 2]) {
+    /// Value and parametric gradient of shape function `a` at `xi`, for any [`Scalar`].
+    #[inline]
+    fn shape_node_at<T: Scalar>(self, xi: [T; 2], a: usize) -> (T, [T; 2]) {
         match self {
             FaceType::Quad4 => tensor_node(TensorFamily::Linear, xi, QUAD_NODES[a]),
             FaceType::Quad8 => tensor_node(TensorFamily::Serendipity, xi, QUAD_NODES[a]),
@@ -272,10 +325,7 @@ impl FaceType {
     /// # Panics
     /// If `n.len() != self.num_nodes()`.
     pub fn shape(self, xi: [f64; 2], n: &mut [f64]) {
-        assert_eq!(n.len(), self.num_nodes(), "shape: wrong buffer length");
-        for (a, na) in n.iter_mut().enumerate() {
-            *na = self.shape_node(xi, a).0;
-        }
+        self.shape_at(xi, n);
     }
 
     /// Parametric gradients dN_a/dxi_j; dn.len() == num_nodes().
@@ -283,23 +333,77 @@ impl FaceType {
     /// # Panics
     /// If `dn.len() != self.num_nodes()`.
     pub fn shape_grad(self, xi: [f64; 2], dn: &mut [[f64; 2]]) {
+        self.shape_grad_at(xi, dn);
+    }
+
+    /// [`FaceType::shape`] for any [`Scalar`]: with a dual `xi`, the values carry their
+    /// derivatives along `xi`'s.
+    ///
+    /// # Panics
+    /// If `n.len() != self.num_nodes()`.
+    pub fn shape_at<T: Scalar>(self, xi: [T; 2], n: &mut [T]) {
+        assert_eq!(n.len(), self.num_nodes(), "shape: wrong buffer length");
+        for (a, na) in n.iter_mut().enumerate() {
+            *na = self.shape_node_at(xi, a).0;
+        }
+    }
+
+    /// Values and gradients at once, for any [`Scalar`] ([`FaceType::shape_at`] and
+    /// [`FaceType::shape_grad_at`] in one pass).
+    ///
+    /// # Panics
+    /// If `n.len()` or `dn.len()` differs from `self.num_nodes()`.
+    pub fn shape_and_grad_at<T: Scalar>(self, xi: [T; 2], n: &mut [T], dn: &mut [[T; 2]]) {
+        assert_eq!(n.len(), self.num_nodes(), "shape: wrong buffer length");
+        assert_eq!(dn.len(), self.num_nodes(), "shape: wrong buffer length");
+        for (a, (na, ga)) in n.iter_mut().zip(dn.iter_mut()).enumerate() {
+            (*na, *ga) = self.shape_node_at(xi, a);
+        }
+    }
+
+    /// [`FaceType::shape_grad`] for any [`Scalar`] (with a dual `xi`, the gradients carry the
+    /// second derivatives of the shape functions along `xi`'s derivatives).
+    ///
+    /// # Panics
+    /// If `dn.len() != self.num_nodes()`.
+    pub fn shape_grad_at<T: Scalar>(self, xi: [T; 2], dn: &mut [[T; 2]]) {
         assert_eq!(
             dn.len(),
             self.num_nodes(),
             "shape_grad: wrong buffer length"
         );
         for (a, ga) in dn.iter_mut().enumerate() {
-            *ga = self.shape_node(xi, a).1;
+            *ga = self.shape_node_at(xi, a).1;
         }
     }
 }
 
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+/// `a x b` for any [`Scalar`].
+pub fn cross_at<T: Scalar>(a: [T; 3], b: [T; 3]) -> [T; 3] {
     [
         a[1] * b[2] - a[2] * b[1],
         a[2] * b[0] - a[0] * b[2],
         a[0] * b[1] - a[1] * b[0],
     ]
+}
+
+/// Position `x(xi) = sum_a N_a(xi) x_a` on a face, for any [`Scalar`] (dual node coordinates
+/// and/or a dual `xi`).
+///
+/// # Panics
+/// If `x.len() != ft.num_nodes()`.
+pub fn face_point_at<T: Scalar>(ft: FaceType, x: &[[T; 3]], xi: [T; 2]) -> [T; 3] {
+    let nn = ft.num_nodes();
+    assert_eq!(x.len(), nn, "face_point: wrong number of node coordinates");
+    let mut n = [T::from(0.0); MAX_FACE_NODES];
+    ft.shape_at(xi, &mut n[..nn]);
+    let mut p = [T::from(0.0); 3];
+    for (xa, na) in x.iter().zip(&n[..nn]) {
+        for d in 0..3 {
+            p[d] += *na * xa[d];
+        }
+    }
+    p
 }
 
 /// Tangent vectors (x_,xi, x_,eta) of a face at xi.
@@ -309,19 +413,27 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 /// # Panics
 /// If `x.len() != ft.num_nodes()`.
 pub fn face_tangents(ft: FaceType, x: &[[f64; 3]], xi: [f64; 2]) -> ([f64; 3], [f64; 3]) {
+    face_tangents_at(ft, x, xi)
+}
+
+/// [`face_tangents`] for any [`Scalar`] (dual node coordinates and/or a dual `xi`).
+///
+/// # Panics
+/// If `x.len() != ft.num_nodes()`.
+pub fn face_tangents_at<T: Scalar>(ft: FaceType, x: &[[T; 3]], xi: [T; 2]) -> ([T; 3], [T; 3]) {
     let nn = ft.num_nodes();
     assert_eq!(
         x.len(),
         nn,
         "face_tangents: wrong number of node coordinates"
     );
-    let mut dn = [[0.0; 2]; MAX_FACE_NODES];
-    ft.shape_grad(xi, &mut dn[..nn]);
-    let mut t = [[0.0; 3]; 2];
+    let mut dn = [[T::from(0.0); 2]; MAX_FACE_NODES];
+    ft.shape_grad_at(xi, &mut dn[..nn]);
+    let mut t = [[T::from(0.0); 3]; 2];
     for (xa, ga) in x.iter().zip(&dn[..nn]) {
         for (tk, gk) in t.iter_mut().zip(ga) {
             for d in 0..3 {
-                tk[d] += gk * xa[d];
+                tk[d] += *gk * xa[d];
             }
         }
     }
@@ -337,13 +449,22 @@ pub fn face_tangents(ft: FaceType, x: &[[f64; 3]], xi: [f64; 2]) -> ([f64; 3], [
 /// # Panics
 /// If `x.len() != ft.num_nodes()`.
 pub fn face_normal(ft: FaceType, x: &[[f64; 3]], xi: [f64; 2]) -> ([f64; 3], f64) {
-    let (t1, t2) = face_tangents(ft, x, xi);
-    let c = cross(t1, t2);
-    let jac = c.iter().map(|v| v * v).sum::<f64>().sqrt();
-    if jac > 0.0 {
+    face_normal_at(ft, x, xi)
+}
+
+/// [`face_normal`] for any [`Scalar`]; a degenerate face (zero Jacobian in the real part) gives
+/// zeros with no derivative.
+///
+/// # Panics
+/// If `x.len() != ft.num_nodes()`.
+pub fn face_normal_at<T: Scalar>(ft: FaceType, x: &[[T; 3]], xi: [T; 2]) -> ([T; 3], T) {
+    let (t1, t2) = face_tangents_at(ft, x, xi);
+    let c = cross_at(t1, t2);
+    let jac = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
+    if jac.re() > 0.0 {
         (c.map(|v| v / jac), jac)
     } else {
-        ([0.0; 3], 0.0)
+        ([T::from(0.0); 3], T::from(0.0))
     }
 }
 
@@ -727,7 +848,7 @@ mod tests {
         let s = 1.0 / 3f64.sqrt();
         let e1 = [1.0 / 2f64.sqrt(), -1.0 / 2f64.sqrt(), 0.0];
         let e2 = [1.0 / 6f64.sqrt(), 1.0 / 6f64.sqrt(), -2.0 / 6f64.sqrt()];
-        let normal = cross(e1, e2);
+        let normal = cross_at(e1, e2);
         assert_vec_close(normal, [s, s, s], 1e-15, "plane basis");
         let origin = [0.3, -1.2, 2.5];
         let quad = [[0.0, 0.0], [2.0, 0.1], [2.5, 1.7], [-0.4, 1.2]];

@@ -71,7 +71,7 @@ pub struct CaseFile {
     /// Body forces per unit reference volume.
     #[serde(default)]
     pub body_force: Vec<BodyForceSpec>,
-    /// Interfaces between face sets (mesh tying; contact comes later).
+    /// Interfaces between face sets: mesh tying or frictional contact.
     #[serde(default)]
     pub interface: Vec<InterfaceSpec>,
     /// Load stepping.
@@ -214,12 +214,23 @@ pub struct BodyForceSpec {
 }
 
 /// An interface between two face sets, enforced by mortar weights (Puso, Laursen & Solberg).
+///
+/// ```toml
+/// [[interface]]
+/// name = "blocks"
+/// kind = "contact"          # or "tied"
+/// secondary = "lower.top"   # carries the traction unknowns
+/// primary = "upper.bottom"
+/// friction = 0.3            # Coulomb mu (contact only)
+/// ```
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct InterfaceSpec {
     /// Name, used in output file names and metric names.
     pub name: String,
-    /// `"tied"`: the two sides move together (the vector weighted-gap constraint g_A = 0).
+    /// `"tied"`: the two sides move together (the vector weighted-gap constraint g_A = 0, on
+    /// reference weights). `"contact"`: unilateral frictional contact (Kuhn-Tucker conditions on
+    /// the normalized weighted gap, Coulomb friction on the mortar slip), on current weights.
     pub kind: String,
     /// Face set of the secondary side (the paper's slave / non-mortar side: it carries the
     /// traction unknowns).
@@ -236,34 +247,38 @@ pub struct InterfaceSpec {
     #[serde(default = "one")]
     pub passes: usize,
     /// Penalty factor alpha: eps_A = alpha E / h_A with E the secondary body's Young's modulus
-    /// and h_A = sqrt(a_A). Default 1000 (one pass then needs 1-3 Uzawa augmentations).
-    #[serde(default = "default_penalty")]
-    pub penalty: f64,
-    /// Uzawa augmentations stop when every |g_A| / a_A is below this fraction of h_A. Default
-    /// 1e-12: a tied interface transmits tractions, which plain penalty buys with a gap of about
-    /// t / eps; this tolerance makes that gap, and the displacement error it causes, negligible
-    /// (the tied patch test holds to 1e-10).
-    #[serde(default = "default_uzawa_tol")]
-    pub uzawa_tol: f64,
-    /// At most this many augmentations per load step (0: plain penalty). Default 50 for one
-    /// pass and 0 for two passes: on dissimilar meshes the two passes' weak continuity
+    /// and h_A = sqrt(a_A) (a_A the integral of node A's traction function over the whole
+    /// secondary surface, reference configuration). Default 1000 for tied interfaces (one pass
+    /// then needs 1-3 Uzawa augmentations) and 100 for contact.
+    pub penalty: Option<f64>,
+    /// Uzawa augmentations stop when every violation is below this fraction of h_A. Tied: the
+    /// gap |g_A| / a_A; default 1e-12 (the tied patch test holds to 1e-10). Contact: the
+    /// penetration gh_A of every pressed node and the slip |dsh_A| of every sticking node;
+    /// default 1e-6.
+    pub uzawa_tol: Option<f64>,
+    /// At most this many augmentations per load step (0: plain penalty). Tied: default 50 for
+    /// one pass and 0 for two passes (on dissimilar meshes the two passes' weak continuity
     /// conditions cannot both hold exactly, so augmenting them drives the interface into
-    /// locking (measured: the energy error grows with the penalty); two passes are a penalty
-    /// method.
+    /// locking; two passes are a penalty method). Contact: default 10.
     pub uzawa_max: Option<usize>,
     /// Degree of the triangle rule on each integration pallet. Default 8 for quadratic faces,
     /// 4 for linear ones.
     pub quadrature_degree: Option<usize>,
+    /// Contact: Coulomb friction coefficient mu >= 0. Default 0: frictionless, and then no
+    /// friction work is done at all (no slip, no return map).
+    pub friction: Option<f64>,
+    /// Contact: tangential penalty factor alpha_T (eps_T = alpha_T E / h_A, the stiffness of
+    /// sticking). Default: `penalty`.
+    pub tangential_penalty: Option<f64>,
+    /// Contact: after an augmentation whose worst violation is above a quarter of the previous
+    /// one, both penalties are multiplied by this factor (>= 1). Default 1: no growth.
+    pub penalty_growth: Option<f64>,
+    /// Contact: the penalties grow at most to this multiple of their initial values. Default 100.
+    pub penalty_growth_cap: Option<f64>,
 }
 
 fn two() -> u8 {
     2
-}
-fn default_penalty() -> f64 {
-    1000.0
-}
-fn default_uzawa_tol() -> f64 {
-    1e-12
 }
 
 /// Load stepping: the load factor goes from 0 to 1 in `count` equal steps.
@@ -368,16 +383,21 @@ impl Default for OutputSpec {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct VerificationSpec {
-    /// `"lame_sphere"` (thick sphere under inner pressure; the metric `energy_error`) or
+    /// `"lame_sphere"` (thick sphere under inner pressure; the metric `energy_error`),
     /// `"uniform_strain"` (a linear displacement field u = G X; metrics `max_displacement_error`
-    /// and `max_stress_error`).
+    /// and `max_stress_error`) or `"contact_patch"` (a uniform Cauchy stress everywhere and a
+    /// uniform contact pressure on every contact interface; metrics `max_rel_stress_error`,
+    /// `max_rel_pressure_error` and `net_contact_force`).
     pub kind: String,
     /// lame_sphere: inner and outer radius and inner pressure.
     pub inner_radius: Option<f64>,
     pub outer_radius: Option<f64>,
+    /// lame_sphere: the inner pressure; contact_patch: the exact contact pressure p0.
     pub pressure: Option<f64>,
     /// uniform_strain: the displacement gradient G (row-major 3x3).
     pub gradient: Option<[[f64; 3]; 3]>,
+    /// contact_patch: the exact Cauchy stress (row-major 3x3).
+    pub stress: Option<[[f64; 3]; 3]>,
 }
 
 impl CaseFile {

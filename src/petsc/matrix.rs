@@ -79,6 +79,16 @@ impl Matrix {
         Ok(m)
     }
 
+    /// Lets entries outside the preallocated pattern be added (PETSc reallocates, slowly) instead
+    /// of failing: for contact, whose stencils move with the sliding bodies.
+    pub fn allow_new_nonzeros(&mut self) -> Result<()> {
+        chk!(MatSetOption(
+            self.raw,
+            p::MatOption::MAT_NEW_NONZERO_ALLOCATION_ERR,
+            p::PetscBool::PETSC_FALSE
+        ))
+    }
+
     /// Wraps a matrix PETSc passes to a callback, taking a reference so that drop is balanced.
     ///
     /// # Safety

@@ -29,6 +29,7 @@ use mpi::collective::{CommunicatorCollectives, Root, SystemOperation};
 use mpi::topology::Communicator;
 
 use crate::case::Scene;
+use crate::contact::frictional::ContactInterfaces;
 use crate::contact::tying::{Augmented, TiedInterfaces};
 use crate::dofs::DofMap;
 use crate::error::{Error, Result};
@@ -36,7 +37,8 @@ use crate::io::output::{StepRecord, Summary};
 use crate::petsc::log::Phases;
 use crate::petsc::snes::Tolerances;
 use crate::petsc::{CallbackError, Matrix, Petsc, Scatter, Snes, Vector};
-use bulk::{Bulk, Inverted};
+use bulk::Bulk;
+use model::DomainIssue;
 use model::Model;
 use results::Results;
 
@@ -94,11 +96,19 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         &scene.constrained_mask(),
     );
     let tying = TiedInterfaces::new(scene, &dofs, &world)?;
-    dofs.gather_also(&tying.nodes());
+    let contact = ContactInterfaces::new(scene, &dofs)?;
+    let mut gathered = tying.nodes();
+    gathered.extend(contact.nodes());
+    dofs.gather_also(&gathered);
     let mut model = Model {
         bulk: Bulk::new(scene, &dofs)?,
         tying,
+        contact,
     };
+    // The reference configuration is the first converged state: slip is measured from it.
+    model
+        .contact
+        .commit(scene, &vec![0.0; 3 * scene.mesh.num_nodes()]);
     let mut sparsity = dofs.bulk_sparsity(&scene.mesh);
     model.tying.add_sparsity(&dofs, &mut sparsity);
     let mut jac = Matrix::new_aij(&sparsity)?;
@@ -120,6 +130,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
             max_it: scene.newton.max_it,
         },
         &options_source(scene),
+        if scene.has_friction() { "bt" } else { "basic" },
     )?;
     if scene.is_linear() {
         snes.freeze_jacobian()?;
@@ -151,10 +162,30 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         let dt_min = dt_nominal * 0.5f64.powi(scene.max_cuts as i32) * (1.0 - 1e-12);
         let (mut t, mut dt, mut cuts_in_row, mut step) = (0.0f64, dt_nominal, 0usize, 0usize);
         let mut uzawa_capped = 0usize;
+        // Contact force sums of every converged step, per interface.
+        let mut contact_history: Vec<Vec<[f64; crate::contact::frictional::FORCE_SUMS]>> =
+            Vec::new();
         let mut x_prev = x.duplicate()?;
         while t < 1.0 - 1e-12 {
             let t_new = if t + dt > 1.0 - 1e-9 { 1.0 } else { t + dt };
             x.copy_to(&mut x_prev)?;
+            if !model.contact.is_empty() {
+                // The contact stencils of this step (pairs within a margin): a new matrix when
+                // the pattern grew.
+                let mut st = state.borrow_mut();
+                st.t = t;
+                st.load(scene, &dofs, &x)?;
+                let grew = model
+                    .contact
+                    .add_sparsity(scene, &dofs, &st.u, &mut sparsity);
+                let mut any = 0i32;
+                world.all_reduce_into(&(grew as i32), &mut any, SystemOperation::max());
+                if any > 0 {
+                    jac = Matrix::new_aij(&sparsity)?;
+                    jac.allow_new_nonzeros()?;
+                }
+            }
+            let contact_saved = model.contact.save();
             state.borrow_mut().assembly_seconds = 0.0;
             let t_solve = Instant::now();
             if scene.predictor {
@@ -197,13 +228,14 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                 };
                 newton_total += outcome.iterations;
                 linear_total += outcome.linear_iterations;
-                if !outcome.converged || model.tying.is_empty() {
+                if !outcome.converged || (model.tying.is_empty() && model.contact.is_empty()) {
                     break outcome;
                 }
-                // Uzawa: augment the tied interfaces until their gaps meet the tolerance.
+                // Uzawa: augment the interfaces until their violations meet the tolerances.
                 state.borrow_mut().load(scene, &dofs, &x)?;
                 let s = state.borrow();
-                match model.tying.augment(&s.u, augmentations, &world) {
+                let (augmented, violation) = model.augment(scene, &s.u, augmentations, &world);
+                match augmented {
                     Augmented::Converged => break outcome,
                     Augmented::CapReached => {
                         uzawa_capped += 1;
@@ -211,7 +243,8 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                             eprintln!(
                                 "mortar: warning: step {} (load {t_new}): an interface is still \
                                  above its uzawa_tol after uzawa_max = {augmentations} \
-                                 augmentations (relative gap {:.3e})",
+                                 augmentations (tied relative gap {:.3e}, contact violation \
+                                 {violation:.3e})",
                                 step + 1,
                                 model.tying.max_relative_gap(&s.u, &world)
                             );
@@ -246,6 +279,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                     .unwrap_or_else(|| outcome.reason.to_string());
                 x_prev.copy_to(&mut x)?;
                 model.tying.set_multipliers(&multipliers);
+                model.contact.restore(&contact_saved);
                 // Bounded in depth, not only in a row: fail/converge cycles cannot shrink the step
                 // below dt_nominal / 2^max_cuts.
                 let giving_up = cuts_in_row > scene.max_cuts || 0.5 * dt < dt_min;
@@ -277,6 +311,8 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
             state.borrow_mut().load(scene, &dofs, &x)?;
             let s = state.borrow();
             let reactions = results.reactions(scene, &model, &s.u, t, &world)?;
+            let contact_forces = model.contact.force_sums(scene, &s.u, &world);
+            contact_history.push(contact_forces.clone());
             let write_vtu = scene.vtu_every > 0 && (step % scene.vtu_every == 0 || t >= 1.0);
             if write_vtu {
                 results.write_step(scene, &dofs, &model, &s.u, step, t, &world)?;
@@ -295,12 +331,15 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                 linear_its: linear_total,
                 residual: final_res,
                 reactions: &reactions,
+                u: &s_u(&state),
+                contact_forces: &contact_forces,
                 seconds: [
                     assembly,
                     (solve_seconds - assembly).max(0.0),
                     t_out.elapsed().as_secs_f64(),
                 ],
             })?;
+            model.contact.commit(scene, &s_u(&state));
             summary.steps.push(StepRecord {
                 step,
                 load: t,
@@ -352,7 +391,10 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                     .insert(format!("pairs_{}_{kind}", tied.name), *count as f64);
             }
         }
-        if !model.tying.is_empty() {
+        for (k, v) in contact_summary(&model.contact, &contact_history, &world) {
+            summary.metrics.insert(k, v);
+        }
+        if !model.tying.is_empty() || !model.contact.is_empty() {
             summary
                 .metrics
                 .insert("uzawa_capped_steps".into(), uzawa_capped as f64);
@@ -409,6 +451,47 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         }
         other => other,
     }
+}
+
+/// Contact figures of a run: the segment-pair counts of the last evaluation
+/// (`pairs_<name>_<kind>`, summed over ranks) and, for frictional interfaces,
+/// `slip_force_ratio_<name>`: the mean of tangential / (mu normal) contact force over the steps
+/// in which every pressed node slips (also as `slip_force_ratio` when the scene has one
+/// frictional interface).
+fn contact_summary(
+    contact: &ContactInterfaces,
+    history: &[Vec<[f64; crate::contact::frictional::FORCE_SUMS]>],
+    world: &mpi::topology::SimpleCommunicator,
+) -> Vec<(String, f64)> {
+    let mut out = Vec::new();
+    let frictional: Vec<usize> = (0..contact.interfaces.len())
+        .filter(|&i| contact.interfaces[i].mu > 0.0)
+        .collect();
+    for (i, iface) in contact.interfaces.iter().enumerate() {
+        let stats = iface.stats.borrow().to_map();
+        let vals: Vec<u64> = stats.values().map(|&v| v as u64).collect();
+        let mut sums = vec![0u64; vals.len()];
+        world.all_reduce_into(&vals[..], &mut sums[..], SystemOperation::sum());
+        for (kind, v) in stats.keys().zip(sums) {
+            out.push((format!("pairs_{}_{kind}", iface.name), v as f64));
+        }
+        if iface.mu > 0.0 {
+            let ratios: Vec<f64> = history
+                .iter()
+                .map(|step| step[i])
+                .filter(|f| f[5] == 0.0 && f[6] > 0.0 && f[0] > 0.0)
+                .map(|f| f[1] / (iface.mu * f[0]))
+                .collect();
+            if !ratios.is_empty() {
+                let mean = ratios.iter().sum::<f64>() / ratios.len() as f64;
+                out.push((format!("slip_force_ratio_{}", iface.name), mean));
+                if frictional.len() == 1 {
+                    out.push(("slip_force_ratio".into(), mean));
+                }
+            }
+        }
+    }
+    out
 }
 
 /// The consistent load-step predictor.
@@ -525,25 +608,40 @@ fn partition(
     Ok(parts.into_iter().map(|p| p as usize).collect())
 }
 
-/// Turns a local inverted-element finding into the same domain error on every rank.
+/// Turns a local domain issue (an inverted element, a failed contact evaluation) into the same
+/// domain error on every rank.
 fn collective_domain_check(
     world: &mpi::topology::SimpleCommunicator,
-    inv: Option<Inverted>,
+    issue: Option<DomainIssue>,
 ) -> Result<(), CallbackError> {
-    let local: i64 = inv.as_ref().map_or(0, |i| i.element as i64 + 1);
-    let mut global: i64 = 0;
-    world.all_reduce_into(&local, &mut global, SystemOperation::max());
-    if global == 0 {
-        return Ok(());
-    }
-    let detail = match &inv {
-        Some(i) if i.element as i64 + 1 == global => format!("det F = {:.3e}", i.det),
-        _ => "on another rank".to_string(),
+    let (element, contact) = match &issue {
+        Some(DomainIssue::Inverted(i)) => (i.element as i64 + 1, 0i64),
+        Some(DomainIssue::Contact(_)) => (0, 1),
+        None => (0, 0),
     };
-    Err(CallbackError::Domain(format!(
-        "element {} inverted ({detail})",
-        global - 1
-    )))
+    let (mut g_element, mut g_contact) = (0i64, 0i64);
+    world.all_reduce_into(&element, &mut g_element, SystemOperation::max());
+    world.all_reduce_into(&contact, &mut g_contact, SystemOperation::max());
+    if g_element > 0 {
+        let detail = match &issue {
+            Some(DomainIssue::Inverted(i)) if i.element as i64 + 1 == g_element => {
+                format!("det F = {:.3e}", i.det)
+            }
+            _ => "on another rank".to_string(),
+        };
+        return Err(CallbackError::Domain(format!(
+            "element {} inverted ({detail})",
+            g_element - 1
+        )));
+    }
+    if g_contact > 0 {
+        let detail = match issue {
+            Some(DomainIssue::Contact(m)) => m,
+            _ => "on another rank".to_string(),
+        };
+        return Err(CallbackError::Domain(format!("contact: {detail}")));
+    }
+    Ok(())
 }
 
 /// The norm of the residual at u = 0 under the full load: the force scale of the absolute

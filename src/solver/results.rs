@@ -28,8 +28,10 @@ use crate::io::output::{write_pvd, write_pvtu, write_vtu, Field, History, Piece,
 use crate::solid::element_stress;
 
 /// One converged step, as a history row: `step, load, newton_its, augmentations, cuts,
-/// linear_its, residual`, the reaction components of every reaction set, and the seconds of
-/// assembly, solve and output. Newton iterations are summed over the step's Uzawa solves.
+/// linear_its, residual`, the reaction components of every reaction set, the contact force
+/// sums of every contact interface (`contact_<name>_normal`, `_tangential`, `_fx`, `_fy`,
+/// `_fz`, `_stick`, `_slip`: see `ContactInterfaces::force_sums`), and the seconds of assembly, solve and output.
+/// Newton iterations are summed over the step's Uzawa solves.
 pub struct StepRow<'a> {
     pub step: usize,
     pub load: f64,
@@ -39,6 +41,9 @@ pub struct StepRow<'a> {
     pub linear_its: usize,
     pub residual: f64,
     pub reactions: &'a [[f64; 3]],
+    /// Displacements (dof-indexed; the constrained dofs at least).
+    pub u: &'a [f64],
+    pub contact_forces: &'a [[f64; crate::contact::frictional::FORCE_SUMS]],
     pub seconds: [f64; 3],
 }
 
@@ -85,6 +90,20 @@ impl Results {
                     cols.push(format!("reaction_{name}_{c}"));
                 }
             }
+            for (name, _) in &reaction_sets {
+                for c in ["x", "y", "z"] {
+                    cols.push(format!("u_{name}_{c}"));
+                }
+            }
+            for iface in scene
+                .interfaces
+                .iter()
+                .filter(|i| i.kind == crate::case::InterfaceKind::Contact)
+            {
+                for c in ["normal", "tangential", "fx", "fy", "fz", "stick", "slip"] {
+                    cols.push(format!("contact_{}_{c}", iface.name));
+                }
+            }
             cols.extend(["seconds_assembly", "seconds_solve", "seconds_output"].map(String::from));
             History::new(dir.join("history.csv"), cols)
         });
@@ -123,6 +142,28 @@ impl Results {
         let mut global = vec![0.0; local.len()];
         world.all_reduce_into(&local[..], &mut global[..], SystemOperation::sum());
         Ok(global.chunks(3).map(|c| [c[0], c[1], c[2]]).collect())
+    }
+
+    /// The mean constrained displacement of each reaction set, per axis (0 where the set
+    /// constrains no dof along that axis).
+    fn set_displacements(&self, u: &[f64]) -> Vec<[f64; 3]> {
+        self.reaction_sets
+            .iter()
+            .map(|(_, dofs)| {
+                let (mut sum, mut count) = ([0.0; 3], [0usize; 3]);
+                for &d in dofs {
+                    sum[d % 3] += u[d];
+                    count[d % 3] += 1;
+                }
+                std::array::from_fn(|c| {
+                    if count[c] > 0 {
+                        sum[c] / count[c] as f64
+                    } else {
+                        0.0
+                    }
+                })
+            })
+            .collect()
     }
 
     /// Writes this rank's VTU piece; after a barrier, rank 0 writes the PVTU and the PVD.
@@ -204,6 +245,7 @@ impl Results {
 
     /// Appends a history row (rank 0).
     pub fn push_history(&mut self, r: &StepRow) -> Result<()> {
+        let set_u = self.set_displacements(r.u);
         let Some(h) = self.history.as_mut() else {
             return Ok(());
         };
@@ -217,16 +259,23 @@ impl Results {
             r.residual,
         ];
         row.extend(r.reactions.iter().flatten());
+        row.extend(set_u.iter().flatten());
+        row.extend(r.contact_forces.iter().flatten());
         row.extend(r.seconds);
         h.push_row(row)
     }
 
-    /// Writes each tied interface (every pass) as its own VTU, with a PVD per interface and
-    /// pass (rank 0): the faces that carried the tractions (reference coordinates), with point
-    /// fields `displacement`, `traction` (t_A; at nodes that carry none, such as the mid-nodes
-    /// under scheme 2, the traction interpolated by the scheme's functions), `weighted_gap`
-    /// (g_A), `gap` (g_A / a_A), `a` (a_A; zero where no traction unknown) and `normal` (the
-    /// averaged unit face normal at each node).
+    /// Writes every interface pass as its own VTU, with a PVD per interface and pass (rank 0):
+    /// the faces that carried the tractions (reference coordinates), with point fields
+    /// `displacement` and `normal` (the averaged unit face normal of the reference faces), and
+    /// - tied interfaces: `traction` (t_A), `weighted_gap` (g_A), `gap` (g_A / a_A) and `a`
+    ///   (a_A);
+    /// - contact interfaces: `pressure` (p_A), `gap` (gh_A, positive in penetration),
+    ///   `slip` (the step's normalized slip increment dsh_A), `traction_t` (tangential traction),
+    ///   `traction` (p_A nu_A + t_T), `status` (0 open, 1 stick, 2 slip) and `a` (a_A).
+    ///
+    /// At nodes that carry no traction (mid-nodes under scheme 2) the tractions and pressure are
+    /// interpolated by the scheme's functions; the other fields are zero there.
     pub fn write_interfaces(
         &mut self,
         scene: &Scene,
@@ -242,24 +291,102 @@ impl Results {
                 if self.rank != 0 {
                     continue;
                 }
+                let rows: Vec<usize> = pass.rows.iter().map(|r| r.node).collect();
+                let flat = |v: &[[f64; 3]]| -> Vec<f64> { v.iter().flatten().copied().collect() };
+                let weighted: Vec<f64> = gap
+                    .iter()
+                    .zip(&pass.rows)
+                    .flat_map(|(g, r)| g.map(|v| v * r.area))
+                    .collect();
+                let area: Vec<f64> = pass.rows.iter().map(|r| r.area).collect();
+                let (traction, gap) = (flat(&traction), flat(&gap));
+                let fields = [
+                    row_field("traction", 3, &traction, true),
+                    row_field("weighted_gap", 3, &weighted, false),
+                    row_field("gap", 3, &gap, false),
+                    row_field("a", 1, &area, false),
+                ];
                 let stem = format!("{}_{}_pass{}", self.case, tied.name, p + 1);
-                let file = format!("vtu/{stem}_{step:04}.vtu");
-                write_interface_piece(
-                    &self.dir.join(&file),
+                self.write_interface_step(
                     scene,
+                    &stem,
                     tied.scheme,
                     &pass.secondary,
-                    &pass.rows,
-                    &traction,
-                    &gap,
+                    &rows,
+                    &fields,
                     u,
+                    step,
+                    t,
                 )?;
-                let series = self.interface_pvd.entry(stem.clone()).or_default();
-                series.push((t, file));
-                write_pvd(&self.dir.join(format!("{stem}.pvd")), series)?;
+            }
+        }
+        for (i, iface) in model.contact.interfaces.iter().enumerate() {
+            for (p, pass) in iface.passes.iter().enumerate() {
+                let nf = model.contact.pass_fields(scene, i, p, u, world);
+                if self.rank != 0 {
+                    continue;
+                }
+                let vec3 =
+                    |f: &dyn Fn(&crate::contact::frictional::NodeFields) -> [f64; 3]| -> Vec<f64> {
+                        nf.iter().flat_map(f).collect()
+                    };
+                let scalar =
+                    |f: &dyn Fn(&crate::contact::frictional::NodeFields) -> f64| -> Vec<f64> {
+                        nf.iter().map(f).collect()
+                    };
+                let pressure = scalar(&|f| f.pressure);
+                let gap = scalar(&|f| f.gap);
+                let slip = vec3(&|f| f.slip);
+                let traction_t = vec3(&|f| f.traction_t);
+                let traction =
+                    vec3(&|f| std::array::from_fn(|c| f.pressure * f.normal[c] + f.traction_t[c]));
+                let status = scalar(&|f| f.status as f64);
+                let area = scalar(&|f| f.area);
+                let fields = [
+                    row_field("pressure", 1, &pressure, true),
+                    row_field("gap", 1, &gap, false),
+                    row_field("slip", 3, &slip, false),
+                    row_field("traction_t", 3, &traction_t, true),
+                    row_field("traction", 3, &traction, true),
+                    row_field("status", 1, &status, false),
+                    row_field("a", 1, &area, false),
+                ];
+                let stem = format!("{}_{}_pass{}", self.case, iface.name, p + 1);
+                self.write_interface_step(
+                    scene,
+                    &stem,
+                    iface.scheme,
+                    &pass.secondary,
+                    &pass.nodes,
+                    &fields,
+                    u,
+                    step,
+                    t,
+                )?;
             }
         }
         Ok(())
+    }
+
+    /// One interface pass at one step: its VTU and its PVD (rank 0).
+    #[allow(clippy::too_many_arguments)]
+    fn write_interface_step(
+        &mut self,
+        scene: &Scene,
+        stem: &str,
+        scheme: crate::contact::mortar::TractionScheme,
+        faces: &[crate::mesh::FaceRef],
+        rows: &[usize],
+        fields: &[RowField],
+        u: &[f64],
+        step: usize,
+        t: f64,
+    ) -> Result<()> {
+        let file = format!("vtu/{stem}_{step:04}.vtu");
+        write_interface_piece(&self.dir.join(&file), scene, scheme, faces, rows, fields, u)?;
+        let series = self.interface_pvd.entry(stem.to_string()).or_default();
+        series.push((t, file));
+        write_pvd(&self.dir.join(format!("{stem}.pvd")), series)
     }
 
     /// Writes summary.json (rank 0 only).
@@ -326,74 +453,159 @@ impl Results {
         };
         let sums = reduce(&local.sums, SystemOperation::sum());
         let maxima = reduce(&local.maxima, SystemOperation::max());
-        Ok(crate::verify::metrics(&sums, &maxima))
+        let mut out = crate::verify::metrics(&sums, &maxima);
+        out.extend(self.contact_metrics(scene, model, u, world));
+        Ok(out)
+    }
+
+    /// Contact figures: per interface the largest normalized gap (`max_gap_<name>`, positive in
+    /// penetration) relative to the node size h_A (`max_rel_penetration_<name>`), and for the
+    /// contact patch test `max_rel_pressure_error` (the largest |p_A - p0| / p0 over every node
+    /// with an overlap) and `net_contact_force` (|sum of every contact nodal force| / (p0 times
+    /// the contact area)).
+    fn contact_metrics(
+        &self,
+        scene: &Scene,
+        model: &Model,
+        u: &[f64],
+        world: &mpi::topology::SimpleCommunicator,
+    ) -> Vec<(String, f64)> {
+        let contact = &model.contact;
+        let mut out = Vec::new();
+        let patch_pressure = match scene.verification {
+            Some(crate::case::Verification::ContactPatch { pressure, .. }) => Some(pressure),
+            _ => None,
+        };
+        let (mut pressure_error, mut area) = (0.0f64, 0.0);
+        for (i, iface) in contact.interfaces.iter().enumerate() {
+            let mut worst_gap = f64::NEG_INFINITY;
+            let mut worst_rel = 0.0f64;
+            for (p, pass) in iface.passes.iter().enumerate() {
+                let fields = contact.pass_fields(scene, i, p, u, world);
+                for (f, st) in fields.iter().zip(&pass.state) {
+                    if f.area <= 0.0 {
+                        continue;
+                    }
+                    worst_gap = worst_gap.max(f.gap);
+                    worst_rel = worst_rel.max(f.gap / st.h);
+                    if let Some(p0) = patch_pressure {
+                        pressure_error = pressure_error.max((f.pressure - p0).abs() / p0);
+                        if p == 0 {
+                            area += f.area;
+                        }
+                    }
+                }
+            }
+            if worst_gap.is_finite() {
+                out.push((format!("max_gap_{}", iface.name), worst_gap));
+                out.push((format!("max_rel_penetration_{}", iface.name), worst_rel));
+            }
+        }
+        if let Some(p0) = patch_pressure {
+            let mut nodal = vec![0.0; u.len()];
+            contact.add_nodal_forces(scene, u, &mut nodal);
+            let mut local = [0.0; 3];
+            for (d, v) in nodal.iter().enumerate() {
+                local[d % 3] += v;
+            }
+            let mut total = [0.0f64; 3];
+            world.all_reduce_into(&local[..], &mut total[..], SystemOperation::sum());
+            let net = (total[0].powi(2) + total[1].powi(2) + total[2].powi(2)).sqrt();
+            out.push(("max_rel_pressure_error".into(), pressure_error));
+            out.push((
+                "net_contact_force".into(),
+                net / (p0 * area).max(f64::MIN_POSITIVE),
+            ));
+        }
+        out
     }
 }
 
-/// One interface side as a VTU piece (see [`Results::write_interfaces`]).
-#[allow(clippy::too_many_arguments)]
+fn row_field<'a>(
+    name: &'static str,
+    components: usize,
+    values: &'a [f64],
+    interpolate: bool,
+) -> RowField<'a> {
+    RowField {
+        name,
+        components,
+        values,
+        interpolate,
+    }
+}
+
+/// A point field of an interface piece, given at the traction nodes (one value per row).
+struct RowField<'a> {
+    name: &'static str,
+    components: usize,
+    /// `components` values per row.
+    values: &'a [f64],
+    /// At nodes without a traction unknown (mid-nodes under scheme 2), the field interpolated
+    /// by the scheme's traction functions; otherwise zero there.
+    interpolate: bool,
+}
+
+/// One interface side as a VTU piece: the faces that carried the tractions (reference
+/// coordinates) with point fields `displacement`, `normal` (the averaged unit face normal, from
+/// the reference geometry) and the given row fields; `rows` are the traction nodes in field
+/// order.
 fn write_interface_piece(
     path: &Path,
     scene: &Scene,
     scheme: crate::contact::mortar::TractionScheme,
     faces: &[crate::mesh::FaceRef],
-    rows: &[crate::contact::tying::Row],
-    traction: &[[f64; 3]],
-    gap: &[[f64; 3]],
+    rows: &[usize],
+    fields: &[RowField],
     u: &[f64],
 ) -> Result<()> {
+    use crate::contact::mortar::{traction_nodes, traction_shape, TractionScheme};
     let mesh = &scene.mesh;
-    let row_of: BTreeMap<usize, usize> = rows
-        .iter()
-        .enumerate()
-        .map(|(r, row)| (row.node, r))
-        .collect();
+    let row_of: BTreeMap<usize, usize> = rows.iter().enumerate().map(|(r, &n)| (n, r)).collect();
     let mut index: BTreeMap<usize, usize> = BTreeMap::new();
     let (mut types, mut conn, mut offsets) = (Vec::new(), Vec::new(), Vec::new());
     let mut normal_sum: Vec<[f64; 3]> = Vec::new();
-    // Tractions interpolated at nodes without a traction unknown: sum and count per point.
-    let mut interpolated: Vec<([f64; 3], f64)> = Vec::new();
+    // Interpolation at nodes without a traction unknown: (point, rows and weights) per face.
+    let mut interp: Vec<Vec<(usize, f64)>> = Vec::new();
+    let mut counts: Vec<f64> = Vec::new();
     let mut phi = Vec::new();
     for &f in faces {
         let nodes = mesh.face_nodes(f);
         let kind = mesh.face_type(f);
         let x: Vec<[f64; 3]> = nodes.iter().map(|&n| mesh.coords[n]).collect();
-        let carriers = crate::contact::mortar::traction_nodes(kind, scheme).unwrap_or_default();
+        let carriers = traction_nodes(kind, scheme).unwrap_or_default();
         for (&n, xi) in nodes.iter().zip(kind.node_coords()) {
             let next = index.len();
             let k = *index.entry(n).or_insert(next);
             if k == normal_sum.len() {
                 normal_sum.push([0.0; 3]);
-                interpolated.push(([0.0; 3], 0.0));
+                interp.push(Vec::new());
+                counts.push(0.0);
             }
             let (nrm, _) = crate::fe::face_normal(kind, &x, xi);
             for c in 0..3 {
                 normal_sum[k][c] += nrm[c];
             }
-            if !row_of.contains_key(&n)
-                && scheme != crate::contact::mortar::TractionScheme::PiecewiseLinear
-            {
-                crate::contact::mortar::traction_shape(kind, scheme, 0, xi, &mut phi);
-                let acc = &mut interpolated[k];
+            if !row_of.contains_key(&n) && scheme != TractionScheme::PiecewiseLinear {
+                traction_shape(kind, scheme, 0, xi, &mut phi);
                 for (p, &local) in phi.iter().zip(&carriers) {
                     if let Some(&r) = row_of.get(&nodes[local]) {
-                        for (a, t) in acc.0.iter_mut().zip(traction[r]) {
-                            *a += p * t;
-                        }
+                        interp[k].push((r, *p));
                     }
                 }
-                acc.1 += 1.0;
+                counts[k] += 1.0;
             }
             conn.push(k);
         }
         offsets.push(conn.len());
         types.push(kind.vtk_cell_type());
     }
-    let mut points = vec![[0.0; 3]; index.len()];
-    let mut disp = vec![0.0; 3 * index.len()];
-    for (&n, &k) in &index {
-        points[k] = mesh.coords[n];
-        disp[3 * k..3 * k + 3].copy_from_slice(&u[3 * n..3 * n + 3]);
+    let n = index.len();
+    let mut points = vec![[0.0; 3]; n];
+    let mut disp = vec![0.0; 3 * n];
+    for (&node, &k) in &index {
+        points[k] = mesh.coords[node];
+        disp[3 * k..3 * k + 3].copy_from_slice(&u[3 * node..3 * node + 3]);
     }
     let normals: Vec<f64> = normal_sum
         .iter()
@@ -404,67 +616,50 @@ fn write_interface_piece(
             [v[0] / l, v[1] / l, v[2] / l]
         })
         .collect();
-    let n = points.len();
-    let (mut t_field, mut wg_field, mut g_field, mut a_field) = (
-        vec![0.0; 3 * n],
-        vec![0.0; 3 * n],
-        vec![0.0; 3 * n],
-        vec![0.0; n],
-    );
-    for (k, (sum, count)) in interpolated.iter().enumerate() {
-        if *count > 0.0 {
-            for c in 0..3 {
-                t_field[3 * k + c] = sum[c] / count;
+    let point_values: Vec<Vec<f64>> = fields
+        .iter()
+        .map(|fld| {
+            let nc = fld.components;
+            let mut out = vec![0.0; nc * n];
+            for (&node, &k) in &index {
+                if let Some(&r) = row_of.get(&node) {
+                    out[nc * k..nc * (k + 1)].copy_from_slice(&fld.values[nc * r..nc * (r + 1)]);
+                } else if fld.interpolate && counts[k] > 0.0 {
+                    for &(r, p) in &interp[k] {
+                        for c in 0..nc {
+                            out[nc * k + c] += p * fld.values[nc * r + c] / counts[k];
+                        }
+                    }
+                }
             }
-        }
-    }
-    for (r, row) in rows.iter().enumerate() {
-        if let Some(&k) = index.get(&row.node) {
-            t_field[3 * k..3 * k + 3].copy_from_slice(&traction[r]);
-            g_field[3 * k..3 * k + 3].copy_from_slice(&gap[r]);
-            for c in 0..3 {
-                wg_field[3 * k + c] = gap[r][c] * row.area;
-            }
-            a_field[k] = row.area;
-        }
+            out
+        })
+        .collect();
+    let mut point_data = vec![
+        Field {
+            name: "displacement",
+            components: 3,
+            values: &disp,
+        },
+        Field {
+            name: "normal",
+            components: 3,
+            values: &normals,
+        },
+    ];
+    for (fld, values) in fields.iter().zip(&point_values) {
+        point_data.push(Field {
+            name: fld.name,
+            components: fld.components,
+            values,
+        });
     }
     let piece = Piece {
         points: &points,
         cell_types: &types,
         connectivity: &conn,
         offsets: &offsets,
-        point_data: vec![
-            Field {
-                name: "displacement",
-                components: 3,
-                values: &disp,
-            },
-            Field {
-                name: "traction",
-                components: 3,
-                values: &t_field,
-            },
-            Field {
-                name: "weighted_gap",
-                components: 3,
-                values: &wg_field,
-            },
-            Field {
-                name: "gap",
-                components: 3,
-                values: &g_field,
-            },
-            Field {
-                name: "a",
-                components: 1,
-                values: &a_field,
-            },
-            Field {
-                name: "normal",
-                components: 3,
-                values: &normals,
-            },
-        ],
+        point_data,
         cell_data: vec![],
     };
     write_vtu(path, &piece)

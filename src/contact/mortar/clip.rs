@@ -27,11 +27,26 @@
 //! Each dropped point or inside-by-tolerance decision changes the area by at most about
 //! `tol` times the polygon's perimeter, i.e. `~1e-13 scale^2` relative.
 //!
+//! # Provenance
+//!
+//! [`clip_convex_traced`] clips in the same way and also says where each vertex of the result
+//! comes from ([`VertexOrigin`]), which the linearization needs to differentiate the vertices
+//! ([`super::linearize`]). It is recorded, not guessed afterwards: every working vertex carries
+//! the lines of the polygon edges before and after it (each line named by its polygon and two
+//! input vertices). An input vertex starts with its own two edges; a crossing created on the
+//! cut edge `p q` by the clipping edge `a b` gets the lines of `p q` and of `a b`, in the order
+//! of the boundary; a point merged into its neighbour (closer than the length tolerance) hands
+//! over its outer line, so the chain of lines stays that of the polygon. At the end a vertex on
+//! two consecutive edges of one polygon is that polygon's vertex, and a vertex on an edge of each
+//! is their crossing. The clipped polygon is identical to [`clip_convex`]'s.
+//!
 //! # Pallets
 //!
 //! [`pallets`] splits a convex polygon into triangles from its area centroid, one per edge (also
 //! for a triangle): the split depends continuously on the vertices, unlike a diagonal or Delaunay
 //! split whose choice flips with round-off on cocircular polygons (ALGORITHM.md 3.5).
+
+use crate::fe::shape::Scalar;
 
 /// A point or vector of the projection plane.
 pub type Point = [f64; 2];
@@ -108,29 +123,131 @@ pub fn is_convex_ccw(p: &[Point], scale: f64) -> bool {
     })
 }
 
-/// Merges consecutive points (cyclically) closer than `tol`.
-fn merge_close_points(p: &[Point], tol: f64) -> Vec<Point> {
-    let mut out: Vec<Point> = Vec::with_capacity(p.len());
-    for &v in p {
-        if out.last().is_none_or(|&last| distance(last, v) > tol) {
-            out.push(v);
+/// The line of an edge of one of the two input polygons of [`clip_convex_traced`]: polygon
+/// `poly` (0: the first argument, 1: the second) through its input vertices `from` and `to`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct EdgeLine {
+    poly: u8,
+    from: usize,
+    to: usize,
+}
+
+/// A vertex of a polygon being clipped, with the lines of the polygon edges before and after
+/// it: every vertex is the intersection of these two lines.
+#[derive(Clone, Copy, Debug)]
+struct Vertex {
+    p: Point,
+    before: EdgeLine,
+    after: EdgeLine,
+}
+
+/// Where a vertex of the polygon returned by [`clip_convex_traced`] comes from: the input is the
+/// pair `(first, second)` as passed, with the input vertex numbering.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VertexOrigin {
+    /// Input vertex `i` of the first polygon.
+    First(usize),
+    /// Input vertex `j` of the second polygon.
+    Second(usize),
+    /// The crossing of the line through the first polygon's input vertices `first` (an edge) with
+    /// the line through the second polygon's input vertices `second`.
+    Crossing {
+        first: [usize; 2],
+        second: [usize; 2],
+    },
+    /// Two lines of the same polygon that are not consecutive: only after merging points closer
+    /// than the length tolerance (degenerate configurations), where the vertex has no unique
+    /// provenance.
+    Unresolved,
+}
+
+impl Vertex {
+    fn origin(&self) -> VertexOrigin {
+        let (b, a) = (self.before, self.after);
+        if b.poly != a.poly {
+            let (first, second) = if b.poly == 0 { (b, a) } else { (a, b) };
+            return VertexOrigin::Crossing {
+                first: [first.from, first.to],
+                second: [second.from, second.to],
+            };
+        }
+        match (b.to == a.from, b.poly) {
+            (true, 0) => VertexOrigin::First(b.to),
+            (true, _) => VertexOrigin::Second(b.to),
+            (false, _) => VertexOrigin::Unresolved,
         }
     }
-    while out.len() > 1 && distance(out[0], out[out.len() - 1]) <= tol {
-        out.pop();
+}
+
+/// A point of the plane, bare or carried by a traced [`Vertex`].
+trait Located: Copy {
+    fn at(&self) -> Point;
+
+    /// Takes over the edge after `next`, a point merged into this one.
+    fn absorb_next(&mut self, _next: &Self) {}
+
+    /// Takes over the edge before `previous`, a point merged into this one.
+    fn absorb_previous(&mut self, _previous: &Self) {}
+}
+
+impl Located for Point {
+    fn at(&self) -> Point {
+        *self
+    }
+}
+
+impl Located for (Point, usize) {
+    fn at(&self) -> Point {
+        self.0
+    }
+}
+
+impl Located for Vertex {
+    fn at(&self) -> Point {
+        self.p
+    }
+
+    fn absorb_next(&mut self, next: &Self) {
+        self.after = next.after;
+    }
+
+    fn absorb_previous(&mut self, previous: &Self) {
+        self.before = previous.before;
+    }
+}
+
+/// Merges consecutive points (cyclically) closer than `tol`, keeping the first; a kept traced
+/// vertex takes over the outer edge lines of the points merged into it, so that the chain of
+/// edge lines stays that of the polygon.
+fn merge_close_points<V: Located>(p: &[V], tol: f64) -> Vec<V> {
+    let mut out: Vec<V> = Vec::with_capacity(p.len());
+    for v in p {
+        let apart = out
+            .last()
+            .is_none_or(|last| distance(last.at(), v.at()) > tol);
+        if apart {
+            out.push(*v);
+        } else if let Some(last) = out.last_mut() {
+            last.absorb_next(v);
+        }
+    }
+    while out.len() > 1 && distance(out[0].at(), out[out.len() - 1].at()) <= tol {
+        if let Some(last) = out.pop() {
+            out[0].absorb_previous(&last);
+        }
     }
     out
 }
 
 /// Drops vertices within `tol` of the chord joining their neighbours (collinear points, and
 /// reflex corners created by round-off, on either side of the chord), until none is left.
-fn drop_flat_vertices(mut p: Vec<Point>, tol: f64) -> Vec<Point> {
+fn drop_flat_vertices<V: Located>(mut p: Vec<V>, tol: f64) -> Vec<V> {
     let mut changed = true;
     while changed && p.len() >= 3 {
         changed = false;
         let n = p.len();
         for i in 0..n {
-            let (prev, cur, next) = (p[(i + n - 1) % n], p[i], p[(i + 1) % n]);
+            let (prev, cur, next) = (p[(i + n - 1) % n].at(), p[i].at(), p[(i + 1) % n].at());
             if orientation(prev, next, cur).abs() <= tol * distance(prev, next) {
                 p.remove(i);
                 changed = true;
@@ -141,23 +258,38 @@ fn drop_flat_vertices(mut p: Vec<Point>, tol: f64) -> Vec<Point> {
     p
 }
 
-/// Input polygon cleaned for clipping: close points merged, counter-clockwise.
-fn prepared(p: &[Point], tol: f64) -> Vec<Point> {
-    let mut out = merge_close_points(p, tol);
-    if polygon_area(&out) < 0.0 {
-        out.reverse();
+/// Input polygon `poly` (0 or 1) cleaned for clipping: close points merged, counter-clockwise,
+/// each vertex with the lines of its two edges (in the input vertex numbering).
+fn prepared(p: &[Point], poly: u8, tol: f64) -> Vec<Vertex> {
+    let numbered: Vec<(Point, usize)> = p.iter().enumerate().map(|(i, &v)| (v, i)).collect();
+    let mut kept = merge_close_points(&numbered, tol);
+    let points: Vec<Point> = kept.iter().map(|v| v.0).collect();
+    if polygon_area(&points) < 0.0 {
+        kept.reverse();
     }
-    out
+    let n = kept.len();
+    let line = |k: usize, l: usize| EdgeLine {
+        poly,
+        from: kept[k % n].1,
+        to: kept[l % n].1,
+    };
+    (0..n)
+        .map(|k| Vertex {
+            p: kept[k].0,
+            before: line(k + n - 1, k),
+            after: line(k, k + 1),
+        })
+        .collect()
 }
 
 /// Largest distance of a vertex from the first vertex (a cheap size measure).
-fn extent(p: &[Point]) -> f64 {
-    p.iter().map(|&v| distance(v, p[0])).fold(0.0, f64::max)
+fn extent(p: &[Vertex]) -> f64 {
+    p.iter().map(|v| distance(v.p, p[0].p)).fold(0.0, f64::max)
 }
 
 /// The two polygons, the smaller one first: clipping the smaller polygon by the larger one
 /// computes every crossing on a short edge, where its round-off is smallest.
-fn smaller_first(a: Vec<Point>, b: Vec<Point>) -> (Vec<Point>, Vec<Point>) {
+fn smaller_first(a: Vec<Vertex>, b: Vec<Vertex>) -> (Vec<Vertex>, Vec<Vertex>) {
     if !a.is_empty() && !b.is_empty() && extent(&b) < extent(&a) {
         (b, a)
     } else {
@@ -165,21 +297,36 @@ fn smaller_first(a: Vec<Point>, b: Vec<Point>) -> (Vec<Point>, Vec<Point>) {
     }
 }
 
-/// The part of `poly` left of the directed line `a b` (within `tol`).
-fn clip_by_edge(poly: &[Point], a: Point, b: Point, tol: f64) -> Vec<Point> {
-    let area_tol = tol * distance(a, b);
+/// The part of `poly` left of the directed line `a b` (within `tol`), `a` and `b` consecutive
+/// vertices of the clip polygon. A crossing lies on the line of the cut edge of `poly` and on the
+/// line of `a b`, which its traced lines record.
+fn clip_by_edge(poly: &[Vertex], a: &Vertex, b: &Vertex, tol: f64) -> Vec<Vertex> {
+    let area_tol = tol * distance(a.p, b.p);
     let n = poly.len();
     let mut out = Vec::with_capacity(n + 1);
     for i in 0..n {
-        let (p, q) = (poly[i], poly[(i + 1) % n]);
-        let (op, oq) = (orientation(a, b, p), orientation(a, b, q));
+        let (p, q) = (&poly[i], &poly[(i + 1) % n]);
+        let (op, oq) = (orientation(a.p, b.p, p.p), orientation(a.p, b.p, q.p));
         let (p_in, q_in) = (op >= -area_tol, oq >= -area_tol);
         if p_in {
-            out.push(p);
+            out.push(*p);
         }
         if p_in != q_in {
             let t = (op / (op - oq)).clamp(0.0, 1.0);
-            out.push([p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])]);
+            let crossing = [
+                p.p[0] + t * (q.p[0] - p.p[0]),
+                p.p[1] + t * (q.p[1] - p.p[1]),
+            ];
+            let (before, after) = if p_in {
+                (p.after, a.after)
+            } else {
+                (a.after, q.before)
+            };
+            out.push(Vertex {
+                p: crossing,
+                before,
+                after,
+            });
         }
     }
     merge_close_points(&out, tol)
@@ -192,54 +339,87 @@ fn clip_by_edge(poly: &[Point], a: Point, b: Point, tol: f64) -> Vec<Point> {
 /// the area is below `1e-8 scale^2`. Non-finite input, or a `scale` that is not finite and
 /// positive, gives [`Clipped::Empty`]. Never panics, never returns NaN.
 pub fn clip_convex(subject: &[Point], clip: &[Point], scale: f64) -> Clipped {
-    let usable = scale.is_finite() && scale > 0.0 && all_finite(subject) && all_finite(clip);
+    match clip_vertices(subject, clip, scale) {
+        Ok(vertices) => Clipped::Polygon(vertices.iter().map(|v| v.p).collect()),
+        Err(outcome) => outcome,
+    }
+}
+
+/// [`clip_convex`] with the provenance of every vertex of the result (in its order; empty unless
+/// the result is a polygon): a vertex of `first`, a vertex of `second`, or the crossing of an
+/// edge of each (see the module docs).
+pub fn clip_convex_traced(
+    first: &[Point],
+    second: &[Point],
+    scale: f64,
+) -> (Clipped, Vec<VertexOrigin>) {
+    match clip_vertices(first, second, scale) {
+        Ok(vertices) => (
+            Clipped::Polygon(vertices.iter().map(|v| v.p).collect()),
+            vertices.iter().map(Vertex::origin).collect(),
+        ),
+        Err(outcome) => (outcome, Vec::new()),
+    }
+}
+
+/// The clipping of [`clip_convex`] on traced vertices: the polygon, or why there is none.
+fn clip_vertices(first: &[Point], second: &[Point], scale: f64) -> Result<Vec<Vertex>, Clipped> {
+    let usable = scale.is_finite() && scale > 0.0 && all_finite(first) && all_finite(second);
     if !usable {
-        return Clipped::Empty;
+        return Err(Clipped::Empty);
     }
     let tol = LENGTH_TOLERANCE * scale;
-    let (subject, clip) = smaller_first(prepared(subject, tol), prepared(clip, tol));
+    let (subject, clip) = smaller_first(prepared(first, 0, tol), prepared(second, 1, tol));
     let mut poly = subject;
     if clip.len() < 3 {
-        return Clipped::Empty;
+        return Err(Clipped::Empty);
     }
     for i in 0..clip.len() {
         if poly.len() < 3 {
-            return Clipped::Empty;
+            return Err(Clipped::Empty);
         }
-        poly = clip_by_edge(&poly, clip[i], clip[(i + 1) % clip.len()], tol);
+        poly = clip_by_edge(&poly, &clip[i], &clip[(i + 1) % clip.len()], tol);
     }
     let poly = drop_flat_vertices(poly, tol);
     if poly.len() < 3 {
-        return Clipped::Empty;
+        return Err(Clipped::Empty);
     }
-    let area = polygon_area(&poly);
+    let points: Vec<Point> = poly.iter().map(|v| v.p).collect();
+    let area = polygon_area(&points);
     if !area.is_finite() || area <= 0.0 {
-        Clipped::Empty
+        Err(Clipped::Empty)
     } else if area < SLIVER_AREA * scale * scale {
-        Clipped::Sliver
+        Err(Clipped::Sliver)
     } else {
-        Clipped::Polygon(poly)
+        Ok(poly)
     }
 }
 
 /// Area centroid of a polygon; the vertex mean if its area is not positive.
 pub fn area_centroid(p: &[Point]) -> Point {
+    area_centroid_at(p)
+}
+
+/// [`area_centroid`] for any [`Scalar`] (the choice between centroid and mean by the real part).
+pub fn area_centroid_at<T: Scalar>(p: &[[T; 2]]) -> [T; 2] {
     let n = p.len() as f64;
+    let zero = T::from(0.0);
     let mean = p
         .iter()
-        .fold([0.0; 2], |acc, v| [acc[0] + v[0] / n, acc[1] + v[1] / n]);
-    let origin = p.first().copied().unwrap_or([0.0; 2]);
-    let (mut twice_area, mut moment) = (0.0, [0.0; 2]);
+        .fold([zero; 2], |acc, v| [acc[0] + v[0] / n, acc[1] + v[1] / n]);
+    let origin = p.first().copied().unwrap_or([zero; 2]);
+    let (mut twice_area, mut moment) = (zero, [zero; 2]);
     for w in p.windows(2).skip(1) {
-        let (a, b) = (sub(w[0], origin), sub(w[1], origin));
-        let c = cross(a, b);
+        let a = [w[0][0] - origin[0], w[0][1] - origin[1]];
+        let b = [w[1][0] - origin[0], w[1][1] - origin[1]];
+        let c = a[0] * b[1] - a[1] * b[0];
         twice_area += c;
         moment = [moment[0] + c * (a[0] + b[0]), moment[1] + c * (a[1] + b[1])];
     }
-    if twice_area > 0.0 && twice_area.is_finite() {
+    if twice_area.re() > 0.0 && twice_area.re().is_finite() {
         [
-            origin[0] + moment[0] / (3.0 * twice_area),
-            origin[1] + moment[1] / (3.0 * twice_area),
+            origin[0] + moment[0] / (twice_area * 3.0),
+            origin[1] + moment[1] / (twice_area * 3.0),
         ]
     } else {
         mean
@@ -658,5 +838,107 @@ mod tests {
         let sum: f64 = pallets(&pent).iter().map(|p| polygon_area(p)).sum();
         assert!((sum - polygon_area(&pent)).abs() < 1e-14);
         assert!(pallets(&pent[..2]).is_empty());
+    }
+
+    /// The point a provenance stands for: the input vertex, or the crossing of the two lines.
+    fn origin_point(origin: VertexOrigin, a: &[Point], b: &[Point]) -> Option<Point> {
+        match origin {
+            VertexOrigin::First(i) => Some(a[i]),
+            VertexOrigin::Second(j) => Some(b[j]),
+            VertexOrigin::Crossing { first, second } => {
+                let (p, q) = (a[first[0]], a[first[1]]);
+                let (c, d) = (b[second[0]], b[second[1]]);
+                let (op, oq) = (orientation(c, d, p), orientation(c, d, q));
+                let t = op / (op - oq);
+                Some([p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])])
+            }
+            VertexOrigin::Unresolved => None,
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(1024))]
+
+        /// Random convex pairs, in either vertex order: every vertex of the traced clipping is
+        /// reproduced by its provenance (1e-9), and the polygon is that of `clip_convex`.
+        #[test]
+        fn provenance_reproduces_the_vertices(
+            pa in points_strategy(),
+            pb in points_strategy(),
+            offset in (-1.0..1.0f64, -1.0..1.0f64),
+            reverse in any::<bool>(),
+        ) {
+            let a = convex_hull(&pa);
+            let mut b: Vec<Point> = convex_hull(&pb)
+                .into_iter()
+                .map(|v| [v[0] + offset.0, v[1] + offset.1])
+                .collect();
+            prop_assume!(a.len() >= 3 && b.len() >= 3);
+            prop_assume!(polygon_area(&a) > 1e-3 && polygon_area(&b) > 1e-3);
+            if reverse {
+                b.reverse();
+            }
+            let (clipped, origins) = clip_convex_traced(&a, &b, 1.0);
+            prop_assert_eq!(&clipped, &clip_convex(&a, &b, 1.0));
+            if let Clipped::Polygon(p) = &clipped {
+                prop_assert_eq!(p.len(), origins.len());
+                for (v, &origin) in p.iter().zip(&origins) {
+                    let traced = origin_point(origin, &a, &b);
+                    prop_assert!(traced.is_some_and(|t| distance(t, *v) < 1e-9),
+                        "{:?}: {:?} vs {:?}", origin, traced, v);
+                }
+            } else {
+                prop_assert!(origins.is_empty());
+            }
+        }
+    }
+
+    /// Two unit squares offset by half a side: the overlap's corners are a vertex of each and two
+    /// edge crossings, named with the input numbering (also for a clockwise second polygon).
+    #[test]
+    fn provenance_of_offset_squares() {
+        let a = square(0.0, 0.0, 1.0);
+        let b = square(0.5, 0.5, 1.0);
+        let expected = [
+            ([0.5, 0.5], VertexOrigin::Second(0)),
+            (
+                [1.0, 0.5],
+                VertexOrigin::Crossing {
+                    first: [1, 2],
+                    second: [0, 1],
+                },
+            ),
+            ([1.0, 1.0], VertexOrigin::First(2)),
+            (
+                [0.5, 1.0],
+                VertexOrigin::Crossing {
+                    first: [2, 3],
+                    second: [3, 0],
+                },
+            ),
+        ];
+        let (clipped, origins) = clip_convex_traced(&a, &b, 1.0);
+        let Clipped::Polygon(p) = clipped else {
+            panic!("{clipped:?}");
+        };
+        assert_eq!(p.len(), 4);
+        for (point, origin) in expected {
+            let k = p.iter().position(|v| distance(*v, point) < 1e-15).unwrap();
+            assert_eq!(origins[k], origin, "{point:?}");
+        }
+        // The second polygon clockwise: the same vertices, edges named by the input numbering.
+        let cw: Vec<Point> = b.iter().rev().copied().collect();
+        let (clipped, origins) = clip_convex_traced(&a, &cw, 1.0);
+        let Clipped::Polygon(p) = clipped else {
+            panic!("{clipped:?}");
+        };
+        let k = p
+            .iter()
+            .position(|v| distance(*v, [0.5, 0.5]) < 1e-15)
+            .unwrap();
+        assert_eq!(origins[k], VertexOrigin::Second(3));
+        for (v, &origin) in p.iter().zip(&origins) {
+            assert!(distance(origin_point(origin, &a, &cw).unwrap(), *v) < 1e-15);
+        }
     }
 }

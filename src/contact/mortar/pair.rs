@@ -27,14 +27,16 @@
 //!    (`n_m . n_c > -`[`OPPOSED_NORMALS_COSINE`]: [`RejectStats::normals_not_opposed`]), and a
 //!    projected sub-segment that is not convex with positive area (a warped or folded quad, a
 //!    degenerate face: [`RejectStats::non_convex`]).
-//! 3. **Clip** ([`clip_convex`]) with the tolerances relative to the size of `s` (the largest
+//! 3. **Clip** ([`clip_convex`](super::clip::clip_convex); the traced variant, which also
+//!    records where each overlap vertex comes from) with the tolerances relative to the size of `s` (the largest
 //!    distance between its projected vertices): no overlap ([`RejectStats::no_overlap`], also for
 //!    disjoint bounding boxes) or a sliver ([`RejectStats::sliver`]) are counted and skipped.
 //! 4. **Quadrature.** The overlap is split into centroid pallets ([`pallets`]); on each, the
 //!    unit-triangle rule `FaceType::Tri3.quadrature(degree)` mapped affinely. Each point `P` is
 //!    mapped back onto both projected sub-segments: local coordinates on a triangle in closed form
-//!    (barycentric), on a quadrilateral by Newton on the bilinear map (start at the centre, step
-//!    limited to the parent square, converged when the step is below `1e-13`); then to face
+//!    (barycentric), on a quadrilateral by Newton on the bilinear map `p0 + a s + b t + c s t`
+//!    (start at the centre, step limited to the parent square, converged when the step is below
+//!    `1e-13`); then to face
 //!    parent coordinates by the sub-segment's affine map ([`SubSegment::to_parent`]). There `N1`
 //!    (secondary face), `Phi` ([`traction_shape_on`]) and `N2` (primary face) are evaluated.
 //! 5. **Measure.** The weight of a point is the area element of the secondary face pulled back
@@ -60,6 +62,15 @@
 //! finite values; otherwise it is skipped whole and counted ([`RejectStats::inverse_map_failed`]
 //! or [`RejectStats::non_finite`]), so the momentum identity holds also for what is kept.
 //!
+//! # Shared with the linearization
+//!
+//! [`super::linearize`] differentiates this computation along the topology it finds. The steps
+//! above are split so that it runs the same float code (`overlap_of_sub_pair`: steps 2 and 3,
+//! `Projected::invert`), and the pieces it re-evaluates in dual numbers are written once,
+//! generically over the scalar ([`crate::fe::shape::Scalar`]): the plane (`Plane`), the
+//! triangle and bilinear maps (`triangle_local`, `Bilinear`), the sub-segment maps
+//! ([`SubSegment::to_parent_at`]) and the shape functions. Here they run in `f64`.
+//!
 //! # Counting
 //!
 //! Every counter of [`RejectStats`] counts **sub-segment pairs** (a Quad9 against a Quad9 is 16
@@ -78,10 +89,11 @@
 
 use std::collections::BTreeMap;
 
-use super::clip::{clip_convex, is_convex_ccw, pallets, Clipped, Point};
+use super::clip::{clip_convex_traced, is_convex_ccw, pallets, Clipped, Point, VertexOrigin};
 use super::segments::{
     sub_segments, traction_node_count, traction_shape_on, SubSegment, TractionScheme,
 };
+use crate::fe::shape::{cross_at, face_normal_at, face_point_at, Scalar};
 use crate::fe::{face_normal, FaceType};
 
 /// A primary sub-segment is integrated only if its normal `n_m` satisfies
@@ -191,57 +203,67 @@ impl RejectStats {
     }
 }
 
-type Vec3 = [f64; 3];
+impl RejectStats {
+    /// Counts what became of one sub-segment pair.
+    pub(super) fn record(&mut self, outcome: &SubPairOutcome) {
+        match outcome {
+            SubPairOutcome::Integrated => self.pairs_integrated += 1,
+            SubPairOutcome::NormalsNotOpposed => self.normals_not_opposed += 1,
+            SubPairOutcome::NonConvex => self.non_convex += 1,
+            SubPairOutcome::NoOverlap => self.no_overlap += 1,
+            SubPairOutcome::Sliver => self.sliver += 1,
+            SubPairOutcome::Failed(PairFailure::InverseMap) => self.inverse_map_failed += 1,
+            SubPairOutcome::Failed(PairFailure::NonFinite) => self.non_finite += 1,
+        }
+    }
+}
 
-fn dot(a: Vec3, b: Vec3) -> f64 {
+pub(super) type Vec3<T = f64> = [T; 3];
+
+pub(super) fn dot<T: Scalar>(a: Vec3<T>, b: Vec3<T>) -> T {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
-fn cross(a: Vec3, b: Vec3) -> Vec3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
+fn cross<T: Scalar>(a: Vec3<T>, b: Vec3<T>) -> Vec3<T> {
+    cross_at(a, b)
 }
 
-fn minus(a: Vec3, b: Vec3) -> Vec3 {
+fn minus<T: Scalar>(a: Vec3<T>, b: Vec3<T>) -> Vec3<T> {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
-fn normalized(a: Vec3) -> Option<Vec3> {
+/// `a / |a|`, if `|a|` (its real part) is positive and finite.
+fn normalized<T: Scalar>(a: Vec3<T>) -> Option<Vec3<T>> {
     let n = dot(a, a).sqrt();
-    (n > 0.0 && n.is_finite()).then(|| a.map(|v| v / n))
+    (n.re() > 0.0 && n.re().is_finite()).then(|| a.map(|v| v / n))
 }
 
-/// Position on a face at parent coordinates `xi`.
-fn face_point(face: &FaceGeom, xi: [f64; 2]) -> Vec3 {
-    let mut n = [0.0; 9];
-    let nn = face.kind.num_nodes();
-    face.kind.shape(xi, &mut n[..nn]);
-    face.x.iter().zip(&n[..nn]).fold([0.0; 3], |acc, (x, na)| {
-        [acc[0] + na * x[0], acc[1] + na * x[1], acc[2] + na * x[2]]
-    })
+/// True if the node coordinates of a face are all finite.
+pub(super) fn is_finite_face(face: &FaceGeom) -> bool {
+    face.x.iter().flatten().all(|v| v.is_finite())
 }
 
-/// The projection plane of a secondary sub-segment.
-struct Plane {
-    origin: Vec3,
-    normal: Vec3,
-    e1: Vec3,
-    e2: Vec3,
+/// The projection plane of a secondary sub-segment, for any [`Scalar`] (`f64` here; dual numbers
+/// in [`super::linearize`], with the same code).
+pub(super) struct Plane<T = f64> {
+    origin: Vec3<T>,
+    pub(super) normal: Vec3<T>,
+    e1: Vec3<T>,
+    e2: Vec3<T>,
 }
 
-impl Plane {
-    /// The plane through the centre of `seg` of face `face` with the face's normal there.
-    fn of_sub_segment(face: &FaceGeom, seg: &SubSegment) -> Option<Plane> {
-        let centre = seg.centre();
-        let origin = face_point(face, centre);
-        let (normal, jac) = face_normal(face.kind, face.x, centre);
-        if jac <= 0.0 || !origin.iter().chain(&normal).all(|v| v.is_finite()) {
+impl<T: Scalar> Plane<T> {
+    /// The plane through the centre of `seg` of a face of type `kind` with node coordinates `x`,
+    /// with the face's normal there.
+    pub(super) fn of_sub_segment(kind: FaceType, x: &[Vec3<T>], seg: &SubSegment) -> Option<Self> {
+        let centre = seg.centre().map(T::from);
+        let origin = face_point_at(kind, x, centre);
+        let (normal, jac) = face_normal_at(kind, x, centre);
+        let finite = origin.iter().chain(&normal).all(|v| v.re().is_finite());
+        if jac.re() <= 0.0 || !finite {
             return None;
         }
-        let e1 = Self::first_axis(face, seg, normal)?;
+        let e1 = Self::first_axis(x, seg, normal)?;
         Some(Plane {
             origin,
             normal,
@@ -252,23 +274,26 @@ impl Plane {
 
     /// Unit vector along the first edge of `seg` projected on the plane, or (degenerate edge)
     /// along the coordinate axis least aligned with `normal`.
-    fn first_axis(face: &FaceGeom, seg: &SubSegment, normal: Vec3) -> Option<Vec3> {
-        let in_plane = |d: Vec3| {
+    fn first_axis(x: &[Vec3<T>], seg: &SubSegment, normal: Vec3<T>) -> Option<Vec3<T>> {
+        let in_plane = |d: Vec3<T>| {
             let along = dot(d, normal);
             normalized(minus(d, normal.map(|v| v * along)))
         };
-        let edge = minus(face.x[seg.local_nodes[1]], face.x[seg.local_nodes[0]]);
+        let edge = minus(x[seg.local_nodes[1]], x[seg.local_nodes[0]]);
         let axis = (0..3)
-            .min_by(|&i, &j| normal[i].abs().total_cmp(&normal[j].abs()))
-            .map(|i| std::array::from_fn(|d| if d == i { 1.0 } else { 0.0 }))?;
+            .min_by(|&i, &j| normal[i].re().abs().total_cmp(&normal[j].re().abs()))
+            .map(|i| std::array::from_fn(|d| T::from(if d == i { 1.0 } else { 0.0 })))?;
         in_plane(edge).or_else(|| in_plane(axis))
     }
 
-    fn project(&self, x: Vec3) -> Point {
+    /// In-plane coordinates of the projection of `x`.
+    pub(super) fn project(&self, x: Vec3<T>) -> [T; 2] {
         let d = minus(x, self.origin);
         [dot(d, self.e1), dot(d, self.e2)]
     }
+}
 
+impl Plane {
     /// The projected vertices of `seg`, in its order or reversed.
     fn project_sub_segment(&self, face: &FaceGeom, seg: &SubSegment, reverse: bool) -> Vec<Point> {
         let mut p: Vec<Point> = seg
@@ -284,7 +309,7 @@ impl Plane {
 }
 
 /// Largest distance between two vertices.
-fn diameter(p: &[Point]) -> f64 {
+pub(super) fn diameter(p: &[Point]) -> f64 {
     let mut d: f64 = 0.0;
     for (i, a) in p.iter().enumerate() {
         for b in &p[i + 1..] {
@@ -307,29 +332,134 @@ fn bounding_boxes_disjoint(a: &[Point], b: &[Point]) -> bool {
     })
 }
 
+/// `det [u v]` of two plane vectors.
+pub(super) fn det2<T: Scalar>(u: [T; 2], v: [T; 2]) -> T {
+    u[0] * v[1] - u[1] * v[0]
+}
+
+/// Local (barycentric) coordinates of `p` on the triangle `q` and `det(dP/dlocal)`, for any
+/// [`Scalar`]; not finite for a degenerate triangle.
+pub(super) fn triangle_local<T: Scalar>(q: &[[T; 2]], p: [T; 2]) -> ([T; 2], T) {
+    let a = [q[1][0] - q[0][0], q[1][1] - q[0][1]];
+    let b = [q[2][0] - q[0][0], q[2][1] - q[0][1]];
+    let d = [p[0] - q[0][0], p[1] - q[0][1]];
+    let det = det2(a, b);
+    ([det2(d, b) / det, det2(a, d) / det], det)
+}
+
+/// The bilinear map `P(s, t) = sum_i N_i(s, t) q_i` of a quadrilateral `q` (Quad4 local
+/// coordinates) in the monomial form `P = p0 + a s + b t + c s t`, for any [`Scalar`].
+pub(super) struct Bilinear<T = f64> {
+    p0: [T; 2],
+    a: [T; 2],
+    b: [T; 2],
+    c: [T; 2],
+}
+
+impl<T: Scalar> Bilinear<T> {
+    pub(super) fn new(q: &[[T; 2]]) -> Self {
+        let combine = |w: [f64; 4]| -> [T; 2] {
+            std::array::from_fn(|i| {
+                (q[0][i] * w[0] + q[1][i] * w[1] + q[2][i] * w[2] + q[3][i] * w[3]) * 0.25
+            })
+        };
+        Bilinear {
+            p0: combine([1.0, 1.0, 1.0, 1.0]),
+            a: combine([-1.0, 1.0, 1.0, -1.0]),
+            b: combine([-1.0, -1.0, 1.0, 1.0]),
+            c: combine([1.0, -1.0, 1.0, -1.0]),
+        }
+    }
+
+    /// `P(local)` and the Jacobian matrix `J[i][j] = dP_i/dlocal_j`.
+    pub(super) fn eval(&self, local: [T; 2]) -> ([T; 2], [[T; 2]; 2]) {
+        let [s, t] = local;
+        let (a, b, c) = (self.a, self.b, self.c);
+        let p = [
+            self.p0[0] + a[0] * s + b[0] * t + c[0] * s * t,
+            self.p0[1] + a[1] * s + b[1] * t + c[1] * s * t,
+        ];
+        let j = [
+            [a[0] + c[0] * t, b[0] + c[0] * s],
+            [a[1] + c[1] * t, b[1] + c[1] * s],
+        ];
+        (p, j)
+    }
+
+    /// `P(local)` at float local coordinates.
+    pub(super) fn point(&self, local: [f64; 2]) -> [T; 2] {
+        let [s, t] = local;
+        let (a, b, c) = (self.a, self.b, self.c);
+        [
+            self.p0[0] + a[0] * s + b[0] * t + c[0] * (s * t),
+            self.p0[1] + a[1] * s + b[1] * t + c[1] * (s * t),
+        ]
+    }
+
+    /// `det(dP/dlocal)` at `local`.
+    pub(super) fn jacobian(&self, local: [T; 2]) -> T {
+        let [s, t] = local;
+        let (a, b, c) = (self.a, self.b, self.c);
+        (a[0] + c[0] * t) * (b[1] + c[1] * s) - (b[0] + c[0] * s) * (a[1] + c[1] * t)
+    }
+
+    /// The real part of the Jacobian matrix at float local coordinates.
+    pub(super) fn jacobian_re(&self, local: [f64; 2]) -> [[f64; 2]; 2] {
+        let [s, t] = local;
+        let (a, b, c) = (
+            self.a.map(|v| v.re()),
+            self.b.map(|v| v.re()),
+            self.c.map(|v| v.re()),
+        );
+        [
+            [a[0] + c[0] * t, b[0] + c[0] * s],
+            [a[1] + c[1] * t, b[1] + c[1] * s],
+        ]
+    }
+}
+
+/// `J^-1 r` for a 2x2 matrix `J` with determinant `det`.
+pub(super) fn solve2<T: Scalar>(j: [[f64; 2]; 2], det: f64, r: [T; 2]) -> [T; 2] {
+    [
+        (r[0] * j[1][1] - r[1] * j[0][1]) / det,
+        (r[1] * j[0][0] - r[0] * j[1][0]) / det,
+    ]
+}
+
 /// A projected linear sub-segment (triangle or quadrilateral), its vertices in the order of its
 /// sub-segment's vertices: counter-clockwise in the plane (`orientation = 1`, the secondary) or
 /// clockwise (`-1`, the primary).
-struct Projected<'s> {
-    vertices: Vec<Point>,
-    seg: &'s SubSegment,
+pub(super) struct Projected<'s> {
+    pub(super) vertices: Vec<Point>,
+    pub(super) seg: &'s SubSegment,
     orientation: f64,
+    /// The bilinear map of a quadrilateral.
+    bilinear: Option<Bilinear>,
 }
 
 /// Local coordinates of a plane point on a projected sub-segment and `det(dP/dlocal)` there
 /// (negative for a clockwise sub-segment).
-struct LocalPoint {
-    local: [f64; 2],
-    jacobian: f64,
+pub(super) struct LocalPoint {
+    pub(super) local: [f64; 2],
+    pub(super) jacobian: f64,
 }
 
-impl Projected<'_> {
+impl<'s> Projected<'s> {
+    fn new(vertices: Vec<Point>, seg: &'s SubSegment, orientation: f64) -> Self {
+        let bilinear = (vertices.len() == 4).then(|| Bilinear::new(&vertices));
+        Projected {
+            vertices,
+            seg,
+            orientation,
+            bilinear,
+        }
+    }
+
     /// Local coordinates of `p` (barycentric on a triangle, bilinear inverse on a quad).
-    fn invert(&self, p: Point) -> Option<LocalPoint> {
-        let found = if self.vertices.len() == 3 {
-            self.invert_triangle(p)
-        } else {
-            self.invert_quad(p)
+    pub(super) fn invert(&self, p: Point) -> Option<LocalPoint> {
+        let found = match &self.bilinear {
+            None => self.invert_triangle(p),
+            Some(map) => self.invert_quad(map, p),
         }?;
         let slack = LOCAL_DOMAIN_SLACK;
         let [r, s] = found.local;
@@ -347,63 +477,27 @@ impl Projected<'_> {
     }
 
     fn invert_triangle(&self, p: Point) -> Option<LocalPoint> {
-        let [q0, q1, q2] = [self.vertices[0], self.vertices[1], self.vertices[2]];
-        let (a, b) = (
-            [q1[0] - q0[0], q1[1] - q0[1]],
-            [q2[0] - q0[0], q2[1] - q0[1]],
-        );
-        let d = [p[0] - q0[0], p[1] - q0[1]];
-        let det = a[0] * b[1] - a[1] * b[0];
-        if !self.is_positive(det) {
-            return None;
-        }
-        Some(LocalPoint {
-            local: [
-                (d[0] * b[1] - d[1] * b[0]) / det,
-                (a[0] * d[1] - a[1] * d[0]) / det,
-            ],
-            jacobian: det,
-        })
-    }
-
-    /// Bilinear map `P(s, t) = sum_i N_i(s, t) q_i` and its Jacobian matrix.
-    fn bilinear(&self, local: [f64; 2]) -> (Point, [[f64; 2]; 2]) {
-        let mut n = [0.0; 4];
-        let mut dn = [[0.0; 2]; 4];
-        FaceType::Quad4.shape(local, &mut n);
-        FaceType::Quad4.shape_grad(local, &mut dn);
-        let mut p = [0.0; 2];
-        let mut j = [[0.0; 2]; 2];
-        for ((q, na), ga) in self.vertices.iter().zip(n).zip(dn) {
-            for i in 0..2 {
-                p[i] += na * q[i];
-                j[i][0] += ga[0] * q[i];
-                j[i][1] += ga[1] * q[i];
-            }
-        }
-        (p, j)
+        let (local, jacobian) = triangle_local(&self.vertices, p);
+        self.is_positive(jacobian)
+            .then_some(LocalPoint { local, jacobian })
     }
 
     /// Newton on the bilinear map from the centre; each iterate is kept inside `[-2, 2]^2`.
-    fn invert_quad(&self, p: Point) -> Option<LocalPoint> {
+    fn invert_quad(&self, map: &Bilinear, p: Point) -> Option<LocalPoint> {
         let mut local = [0.0; 2];
         for _ in 0..MAX_NEWTON_ITERATIONS {
-            let (x, j) = self.bilinear(local);
+            let (x, j) = map.eval(local);
             let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
             if !self.is_positive(det) {
                 return None;
             }
-            let r = [x[0] - p[0], x[1] - p[1]];
-            let step = [
-                (j[1][1] * r[0] - j[0][1] * r[1]) / det,
-                (j[0][0] * r[1] - j[1][0] * r[0]) / det,
-            ];
+            let step = solve2(j, det, [x[0] - p[0], x[1] - p[1]]);
             local = [
                 (local[0] - step[0]).clamp(-2.0, 2.0),
                 (local[1] - step[1]).clamp(-2.0, 2.0),
             ];
             if step[0].abs().max(step[1].abs()) < NEWTON_STEP_TOLERANCE {
-                let (_, j) = self.bilinear(local);
+                let (_, j) = map.eval(local);
                 let jacobian = j[0][0] * j[1][1] - j[0][1] * j[1][0];
                 return Some(LocalPoint { local, jacobian });
             }
@@ -413,7 +507,7 @@ impl Projected<'_> {
 }
 
 /// Why a sub-segment pair was not accumulated.
-enum PairFailure {
+pub(super) enum PairFailure {
     InverseMap,
     NonFinite,
 }
@@ -559,6 +653,17 @@ fn sub_segment_normal(face: &FaceGeom, seg: &SubSegment) -> Option<Vec3> {
     (jac > 0.0 && n.iter().all(|v| v.is_finite())).then_some(n)
 }
 
+/// The primary sub-segments of a face with their normals (see [`PrimarySub`]).
+pub(super) fn primary_subs<'s>(pri: &FaceGeom, segments: &'s [SubSegment]) -> Vec<PrimarySub<'s>> {
+    segments
+        .iter()
+        .map(|seg| PrimarySub {
+            seg,
+            normal: sub_segment_normal(pri, seg),
+        })
+        .collect()
+}
+
 /// Integrates one secondary face against one primary face (see the module docs), adding the
 /// rejections and integrated sub-segment pairs to `stats`.
 ///
@@ -578,8 +683,7 @@ pub fn integrate_pair(
     assert_eq!(pri.x.len(), pri.kind.num_nodes(), "integrate_pair: primary");
     let traction_count = traction_node_count(sec.kind, opts.scheme);
     let mut total = Accumulator::new(traction_count, sec.kind.num_nodes(), pri.kind.num_nodes());
-    let finite = |f: &FaceGeom| f.x.iter().flatten().all(|v| v.is_finite());
-    if !finite(sec) || !finite(pri) {
+    if !is_finite_face(sec) || !is_finite_face(pri) {
         stats.non_finite += 1;
         return total.into_weights();
     }
@@ -592,47 +696,40 @@ pub fn integrate_pair(
     let mut scratch = Scratch::default();
     let mut pair_acc = Accumulator::new(traction_count, sec.kind.num_nodes(), pri.kind.num_nodes());
     let pri_segments = sub_segments(pri.kind);
-    let pri_normals: Vec<Option<Vec3>> = pri_segments
-        .iter()
-        .map(|m| sub_segment_normal(pri, m))
-        .collect();
+    let primaries = primary_subs(pri, &pri_segments);
     for s_seg in &sub_segments(sec.kind) {
-        let Some(plane) = Plane::of_sub_segment(sec, s_seg) else {
+        let Some(plane) = Plane::of_sub_segment(sec.kind, sec.x, s_seg) else {
             stats.non_convex += pri_segments.len();
             continue;
         };
-        for (m_seg, m_normal) in pri_segments.iter().zip(&pri_normals) {
+        for primary in &primaries {
             pair_acc.clear();
-            let primary = PrimarySub {
-                seg: m_seg,
-                normal: *m_normal,
-            };
-            match integrate_sub_pair(
-                &context,
-                &plane,
-                s_seg,
-                &primary,
-                &mut pair_acc,
-                &mut scratch,
-            ) {
-                SubPairOutcome::Integrated => {
-                    total.merge(&pair_acc);
-                    stats.pairs_integrated += 1;
+            let outcome = match overlap_of_sub_pair(sec, pri, &plane, s_seg, primary) {
+                Ok(overlap) => {
+                    match context.integrate_overlap(
+                        &overlap.polygon,
+                        &overlap.s,
+                        &overlap.m,
+                        &mut pair_acc,
+                        &mut scratch,
+                    ) {
+                        Ok(()) => SubPairOutcome::Integrated,
+                        Err(failure) => SubPairOutcome::Failed(failure),
+                    }
                 }
-                SubPairOutcome::NormalsNotOpposed => stats.normals_not_opposed += 1,
-                SubPairOutcome::NonConvex => stats.non_convex += 1,
-                SubPairOutcome::NoOverlap => stats.no_overlap += 1,
-                SubPairOutcome::Sliver => stats.sliver += 1,
-                SubPairOutcome::Failed(PairFailure::InverseMap) => stats.inverse_map_failed += 1,
-                SubPairOutcome::Failed(PairFailure::NonFinite) => stats.non_finite += 1,
+                Err(outcome) => outcome,
+            };
+            if let SubPairOutcome::Integrated = outcome {
+                total.merge(&pair_acc);
             }
+            stats.record(&outcome);
         }
     }
     total.into_weights()
 }
 
 /// What became of one sub-segment pair.
-enum SubPairOutcome {
+pub(super) enum SubPairOutcome {
     Integrated,
     NormalsNotOpposed,
     NonConvex,
@@ -642,57 +739,76 @@ enum SubPairOutcome {
 }
 
 /// A primary sub-segment and its unit normal at its centre (`None` if degenerate).
-struct PrimarySub<'s> {
-    seg: &'s SubSegment,
+pub(super) struct PrimarySub<'s> {
+    pub(super) seg: &'s SubSegment,
     normal: Option<Vec3>,
 }
 
-/// Steps 2-6 of the module docs for one sub-segment pair, into `acc`.
-fn integrate_sub_pair(
-    context: &PairContext,
+/// The float geometry of a sub-segment pair whose projections overlap (steps 2 and 3 of the
+/// module docs).
+pub(super) struct Overlap<'s> {
+    /// The projected secondary sub-segment (counter-clockwise).
+    pub(super) s: Projected<'s>,
+    /// The projected primary sub-segment, in its own vertex order (clockwise).
+    pub(super) m: Projected<'s>,
+    /// The clipped overlap, counter-clockwise.
+    pub(super) polygon: Vec<Point>,
+    /// The provenance of each vertex of `polygon`: [`VertexOrigin::First`] indexes the vertices
+    /// of `s`, [`VertexOrigin::Second`] those of `m` (both in their sub-segment's vertex order).
+    pub(super) origins: Vec<VertexOrigin>,
+}
+
+/// Steps 2 and 3 of the module docs for one sub-segment pair: the projected sub-segments and
+/// their overlap, or why the pair is not integrated.
+pub(super) fn overlap_of_sub_pair<'s>(
+    sec: &FaceGeom,
+    pri: &FaceGeom,
     plane: &Plane,
-    s_seg: &SubSegment,
-    primary: &PrimarySub,
-    acc: &mut Accumulator,
-    scratch: &mut Scratch,
-) -> SubPairOutcome {
+    s_seg: &'s SubSegment,
+    primary: &PrimarySub<'s>,
+) -> Result<Overlap<'s>, SubPairOutcome> {
     let m_seg = primary.seg;
     let Some(m_normal) = primary.normal else {
-        return SubPairOutcome::NonConvex;
+        return Err(SubPairOutcome::NonConvex);
     };
     if dot(m_normal, plane.normal) > -OPPOSED_NORMALS_COSINE {
-        return SubPairOutcome::NormalsNotOpposed;
+        return Err(SubPairOutcome::NormalsNotOpposed);
     }
-    let s_poly = plane.project_sub_segment(context.sec, s_seg, false);
-    let m_reversed = plane.project_sub_segment(context.pri, m_seg, true);
+    let s_poly = plane.project_sub_segment(sec, s_seg, false);
+    let m_reversed = plane.project_sub_segment(pri, m_seg, true);
     let scale = diameter(&s_poly);
     if !is_convex_ccw(&s_poly, scale) || !is_convex_ccw(&m_reversed, scale) {
-        return SubPairOutcome::NonConvex;
+        return Err(SubPairOutcome::NonConvex);
     }
     if bounding_boxes_disjoint(&s_poly, &m_reversed) {
-        return SubPairOutcome::NoOverlap;
+        return Err(SubPairOutcome::NoOverlap);
     }
-    let overlap = match clip_convex(&s_poly, &m_reversed, scale) {
-        Clipped::Polygon(p) => p,
-        Clipped::Empty => return SubPairOutcome::NoOverlap,
-        Clipped::Sliver => return SubPairOutcome::Sliver,
+    let (polygon, origins) = match clip_convex_traced(&s_poly, &m_reversed, scale) {
+        (Clipped::Polygon(p), origins) => (p, origins),
+        (Clipped::Empty, _) => return Err(SubPairOutcome::NoOverlap),
+        (Clipped::Sliver, _) => return Err(SubPairOutcome::Sliver),
     };
+    let last = m_reversed.len() - 1;
+    let unreversed = |r: usize| last - r;
+    let origins = origins
+        .into_iter()
+        .map(|o| match o {
+            VertexOrigin::Second(r) => VertexOrigin::Second(unreversed(r)),
+            VertexOrigin::Crossing { first, second } => VertexOrigin::Crossing {
+                first,
+                second: second.map(unreversed),
+            },
+            other => other,
+        })
+        .collect();
     let mut m_poly = m_reversed;
     m_poly.reverse();
-    let s_proj = Projected {
-        vertices: s_poly,
-        seg: s_seg,
-        orientation: 1.0,
-    };
-    let m_proj = Projected {
-        vertices: m_poly,
-        seg: m_seg,
-        orientation: -1.0,
-    };
-    match context.integrate_overlap(&overlap, &s_proj, &m_proj, acc, scratch) {
-        Ok(()) => SubPairOutcome::Integrated,
-        Err(failure) => SubPairOutcome::Failed(failure),
-    }
+    Ok(Overlap {
+        s: Projected::new(s_poly, s_seg, 1.0),
+        m: Projected::new(m_poly, m_seg, -1.0),
+        polygon,
+        origins,
+    })
 }
 
 #[cfg(test)]

@@ -49,6 +49,7 @@
 //! Kuhn-Tucker conditions and the normalized gap `g_A / a_A` are meaningless. On Quad9 all the
 //! integrals are positive (`1/36`, `1/9`, `4/9` of the area for corner, mid-edge and centre nodes).
 
+use crate::fe::shape::Scalar;
 use crate::fe::FaceType;
 
 /// How the interface traction is interpolated on a secondary face (the paper's three schemes).
@@ -114,18 +115,30 @@ impl SubSegment {
     /// Values of the sub-segment's own linear (Tri3) or bilinear (Quad4) functions of its vertices
     /// at its local coordinates `local`.
     pub fn linear_shape(&self, local: [f64; 2]) -> [f64; 4] {
-        let mut n = [0.0; 4];
+        self.linear_shape_at(local)
+    }
+
+    /// [`SubSegment::linear_shape`] for any [`Scalar`] (unused entries are zero).
+    pub fn linear_shape_at<T: Scalar>(&self, local: [T; 2]) -> [T; 4] {
+        let mut n = [T::from(0.0); 4];
         let kind = self.linear_kind();
-        kind.shape(local, &mut n[..kind.num_nodes()]);
+        kind.shape_at(local, &mut n[..kind.num_nodes()]);
         n
     }
 
     /// Parent coordinates on the face of the point with sub-segment local coordinates `local`.
     pub fn to_parent(&self, local: [f64; 2]) -> [f64; 2] {
-        let n = self.linear_shape(local);
-        self.vertices.iter().zip(n).fold([0.0; 2], |acc, (v, na)| {
-            [acc[0] + na * v[0], acc[1] + na * v[1]]
-        })
+        self.to_parent_at(local)
+    }
+
+    /// [`SubSegment::to_parent`] for any [`Scalar`], by the affine map of the sub-segment (exact:
+    /// see [`SubSegment::parent_jacobian`]).
+    pub fn to_parent_at<T: Scalar>(&self, local: [T; 2]) -> [T; 2] {
+        let (origin, j) = self.affine_map();
+        [
+            local[0] * j[0][0] + local[1] * j[0][1] + origin[0],
+            local[0] * j[1][0] + local[1] * j[1][1] + origin[1],
+        ]
     }
 
     /// The affine map `xi = origin + J local` of the sub-segment into the parent domain (exact:
@@ -159,12 +172,17 @@ impl SubSegment {
     /// Local coordinates of the point with face parent coordinates `xi` (inverse of
     /// [`SubSegment::to_parent`]; also defined outside the sub-segment).
     pub fn to_local(&self, xi: [f64; 2]) -> [f64; 2] {
+        self.to_local_at(xi)
+    }
+
+    /// [`SubSegment::to_local`] for any [`Scalar`].
+    pub fn to_local_at<T: Scalar>(&self, xi: [T; 2]) -> [T; 2] {
         let (origin, j) = self.affine_map();
         let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
         let d = [xi[0] - origin[0], xi[1] - origin[1]];
         [
-            (j[1][1] * d[0] - j[0][1] * d[1]) / det,
-            (j[0][0] * d[1] - j[1][0] * d[0]) / det,
+            (d[0] * j[1][1] - d[1] * j[0][1]) / det,
+            (d[1] * j[0][0] - d[0] * j[1][0]) / det,
         ]
     }
 
@@ -273,20 +291,31 @@ pub fn traction_shape_on(
     xi: [f64; 2],
     out: &mut Vec<f64>,
 ) {
+    traction_shape_on_at(kind, scheme, segment, xi, out);
+}
+
+/// [`traction_shape_on`] for any [`Scalar`] (with a dual `xi`, `Phi` carries its derivatives).
+pub fn traction_shape_on_at<T: Scalar>(
+    kind: FaceType,
+    scheme: TractionScheme,
+    segment: &SubSegment,
+    xi: [T; 2],
+    out: &mut Vec<T>,
+) {
     out.clear();
-    out.resize(traction_node_count(kind, scheme), 0.0);
+    out.resize(traction_node_count(kind, scheme), T::from(0.0));
     match scheme {
-        TractionScheme::FaceShape => kind.shape(xi, out),
+        TractionScheme::FaceShape => kind.shape_at(xi, out),
         TractionScheme::Corners => {
             let linear = if kind.is_quad() {
                 FaceType::Quad4
             } else {
                 FaceType::Tri3
             };
-            linear.shape(xi, out);
+            linear.shape_at(xi, out);
         }
         TractionScheme::PiecewiseLinear => {
-            let n = segment.linear_shape(segment.to_local(xi));
+            let n = segment.linear_shape_at(segment.to_local_at(xi));
             for (&a, na) in segment.local_nodes.iter().zip(n) {
                 out[a] = na;
             }

@@ -1,0 +1,1427 @@
+//! Frictional mortar contact: the Kuhn-Tucker conditions on the normalized weighted gap and
+//! Coulomb's law on the mortar slip, by penalty plus Uzawa augmented Lagrangian, with the
+//! consistent tangent (ALGORITHM.md sections 1, 2, 4, 6 and 7; the paper's eqs. 5-8).
+//!
+//! # Per traction node A (one pass of one interface)
+//!
+//! With the mortar weights `n1_AB`, `n2_AC` of the **current** configuration (summed over every
+//! face pair whose secondary face carries A, [`crate::contact::mortar`]):
+//!
+//! ```text
+//! a_A   = sum_B n1_AB                                   (traction integral of the overlap)
+//! g_A   = sum_B n1_AB x_B - sum_C n2_AC x_C             (weighted gap vector)
+//! gh_A  = nu_A . g_A / a_A                              (normalized gap, > 0 in penetration)
+//! p_A   = max(0, lambda_A + eps_N gh_A)                 (contact::law::normal_pressure)
+//! dsh_A = (g_A^n - gt_A) / a_A,  gt_A = sum_B n1_AB x_B^n - sum_C n2_AC x_C^n
+//! t_T   = return map of the trial (contact::law::friction_traction)
+//! t_A   = p_A nu_A + t_T
+//! ```
+//!
+//! `x^n` are the positions and `g_A^n` the weighted gap at the last converged step, so
+//! `dsh_A` is the paper's eq. 7 (ALGORITHM.md section 6): the current weights applied to the old
+//! positions, minus the old weights applied to the old positions. A node without overlap at the
+//! last converged step has no slip history yet: `dsh_A = 0` in its first step of contact.
+//! `nu_A` is the averaged nodal normal of the secondary surface (contact::normals), with the
+//! components of symmetry planes removed. The secondary node B receives the force
+//! `-sum_A n1_AB t_A` and the primary node C `+sum_A n2_AC t_A`; in the residual (internal
+//! minus external forces) these enter as `F_B += n1_AB t_A`, `F_C -= n2_AC t_A`.
+//!
+//! Penalties: `eps_N = alpha E / h_A` and `eps_T = alpha_T E / h_A`, with `E` the Young's
+//! modulus of the secondary body at A and `h_A` the mean of `sqrt(area)` of the secondary faces
+//! around A (reference configuration); both are multiplied by the interface's penalty growth
+//! factor (1 unless `penalty_growth` is set). `h_A` is a face size, not the node's share of the
+//! surface (`sqrt(a_full_A)`, which is half as large at an edge and a quarter at a corner): a
+//! penalty that varies from node to node on a uniform mesh turns a uniform penetration into a
+//! non-uniform pressure and fails the penalty patch test. `a_full_A`, the integral of A's
+//! traction function over the whole secondary surface, sets the coverage threshold below.
+//!
+//! A node whose overlap is below [`MIN_COVERAGE`] of its full integral carries no traction
+//! (ALGORITHM.md section 10: a node sliding off the edge of the primary surface has `a_A -> 0`,
+//! and `1 / a_A` in `gh_A` and its derivative would be unbounded).
+//!
+//! # Consistent tangent
+//!
+//! Differentiating the residual actually computed (every term, including the weights):
+//!
+//! ```text
+//! d a    = sum_B d n1_AB
+//! d g    = sum_B (d n1_AB x_B + n1_AB d x_B) - sum_C (d n2_AC x_C + n2_AC d x_C)
+//! d gh   = (nu . d g + g . d nu) / a - gh d a / a
+//! d p    = (dp/dgh) d gh
+//! d dsh  = -(d gt + dsh d a) / a,   d gt = sum_B d n1_AB x_B^n - sum_C d n2_AC x_C^n
+//! d t_T  = (dt_T/d dsh) d dsh + (dt_T/dp) d p + (dt_T/d nu) d nu
+//! d t    = nu d p + p d nu + d t_T
+//! d F_B  = sum_A (d n1_AB t_A + n1_AB d t_A),    d F_C = -sum_A (d n2_AC t_A + n2_AC d t_A)
+//! ```
+//!
+//! with `d n1`, `d n2` from [`crate::contact::mortar::integrate_pair_linearized`] (forward-mode
+//! automatic differentiation of the pair kernel), `d nu` from the nodal normals' exact
+//! derivative, and the law's derivatives from `contact::law`. Friction makes it nonsymmetric.
+//! With `mu = 0` nothing of friction is computed (no old positions, no slip, no return map).
+//!
+//! # Uzawa
+//!
+//! After a converged Newton solve, each node's multipliers are updated (law::uzawa_update);
+//! the violation of a node, relative to `h_A`, is the size of the normal update in gap units,
+//! `|d lambda_N| / eps_N` (the penetration of a pressed node, the multiplier an open node still
+//! holds), and the slip `|dsh_A|` of a sticking node (ALGORITHM.md section 4; a slipping node has
+//! no tangential constraint to meet). Solves repeat while the
+//! largest violation is above `uzawa_tol`, at most `uzawa_max` times per step. With
+//! `penalty_growth > 1`, an augmentation that did not bring the violation below a quarter of the
+//! previous one multiplies both penalties by that factor, up to `penalty_growth_cap`.
+//!
+//! # Parallel layout
+//!
+//! The mesh is replicated and every rank gathers the displacements of every contact surface
+//! node. The owner of a traction node computes everything of that node: it integrates every face
+//! pair whose secondary face carries a node it owns (faces on a partition boundary are thus
+//! integrated by each rank involved), sums them in a canonical order (by secondary face, then
+//! primary face), and adds the node's forces and tangent block into the distributed vector and
+//! matrix, whatever ranks own the rows. The results are therefore independent of the partition
+//! up to the summation order of PETSc's assembly.
+//!
+//! # Matrix pattern
+//!
+//! The pattern of a node's block is every node of the faces carrying it and of the primary faces
+//! their search finds. At the start of each step, [`ContactInterfaces::add_sparsity`] adds the
+//! blocks of the pairs found with a search margin of [`PATTERN_MARGIN`] face sizes, twice the
+//! margin the evaluations use ([`EVAL_MARGIN`]); the solver rebuilds the matrix when the pattern
+//! grows. A pair that still falls outside the pattern inside a step costs PETSc a reallocation,
+//! not an error.
+
+use std::collections::BTreeMap;
+
+use mpi::collective::{CommunicatorCollectives, SystemOperation};
+use mpi::topology::SimpleCommunicator;
+
+use crate::case::{Interface, InterfaceKind, Scene};
+use crate::contact::law::{
+    friction_traction, normal_pressure_touching, uzawa_update, FrictionResult, LawParams,
+    NodeHistory, Status,
+};
+use crate::contact::mortar::{
+    integrate_pair, integrate_pair_linearized, sub_segments, traction_node_count, traction_nodes,
+    traction_shape_on, FaceGeom, IntegrationOptions, LinearizedWeights, RejectStats,
+    TractionScheme,
+};
+use crate::contact::normals::{NodalNormals, SurfaceFace};
+use crate::contact::search::{Aabb, PrimaryTree};
+use crate::contact::tying::Augmented;
+use crate::dofs::DofMap;
+use crate::error::Result;
+use crate::fe::{face_normal, FaceType};
+use crate::mesh::FaceRef;
+use crate::petsc::{Matrix, PetscInt, Sparsity, Vector};
+
+/// A node carries traction only if its overlap integral `a_A` is at least this fraction of its
+/// full integral `a_full_A`.
+pub const MIN_COVERAGE: f64 = 1e-3;
+
+/// Number of figures of [`ContactInterfaces::force_sums`] per interface.
+pub const FORCE_SUMS: usize = 7;
+
+/// Gaps within this fraction of `h_A` of closing count as touching: zero pressure, closed
+/// tangent ([`normal_pressure_touching`]), so that surfaces that start in contact without load
+/// hold each other from the first iteration.
+pub const TOUCH_TOLERANCE: f64 = 1e-10;
+
+/// Search margin of the evaluations, in secondary-face box diagonals.
+pub const EVAL_MARGIN: f64 = 0.5;
+
+/// Search margin of the matrix pattern made at the start of a step, in face box diagonals.
+pub const PATTERN_MARGIN: f64 = 1.0;
+
+/// The state of one traction node that persists between Newton solves.
+#[derive(Clone, Debug, Default)]
+pub struct NodeState {
+    /// Uzawa multipliers and the converged tangential traction of the last step.
+    pub history: NodeHistory,
+    /// Initial penalties `alpha E / h_A` and `alpha_T E / h_A`.
+    pub eps_n: f64,
+    pub eps_t: f64,
+    /// `h_A`: the mean size (square root of the area) of the secondary faces around A.
+    pub h: f64,
+    /// Integral of the node's traction function over the whole secondary surface (reference).
+    pub a_full: f64,
+    /// Weighted gap vector at the last converged step, if the node had an overlap then.
+    pub gap_old: Option<[f64; 3]>,
+}
+
+/// What a node looks like at one state: the fields written to the interface output.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct NodeFields {
+    /// `a_A` (0 without overlap).
+    pub area: f64,
+    /// Normalized gap `gh_A` (positive in penetration; 0 without overlap).
+    pub gap: f64,
+    /// Contact pressure `p_A >= 0`.
+    pub pressure: f64,
+    /// Normalized slip increment of the step `dsh_A`, tangential part.
+    pub slip: [f64; 3],
+    /// Tangential traction `t_T`.
+    pub traction_t: [f64; 3],
+    /// Unit nodal normal.
+    pub normal: [f64; 3],
+    /// 0 open (or no overlap), 1 stick, 2 slip.
+    pub status: u8,
+}
+
+/// One pass: which side carries the tractions, and its nodes' state.
+#[derive(Clone, Debug)]
+pub struct ContactPass {
+    /// Faces carrying the tractions.
+    pub secondary: Vec<FaceRef>,
+    sec_faces: Vec<FaceData>,
+    pri_faces: Vec<FaceData>,
+    /// Traction nodes (global ids), ascending.
+    pub nodes: Vec<usize>,
+    /// Per secondary face: the index into `nodes` of its k-th traction node.
+    carriers: Vec<Vec<usize>>,
+    /// Per traction node.
+    pub state: Vec<NodeState>,
+    /// Secondary faces that carry a node this rank owns (the faces it integrates).
+    local_faces: Vec<usize>,
+    /// Owned traction nodes (indices into `nodes`).
+    owned: Vec<usize>,
+    /// Symmetry constraints `(node, axis)` of the secondary surface (for the normals).
+    symmetry: Vec<(usize, usize)>,
+}
+
+/// A face's type and global nodes.
+#[derive(Clone, Debug)]
+struct FaceData {
+    kind: FaceType,
+    nodes: Vec<usize>,
+}
+
+/// One contact interface.
+#[derive(Clone, Debug)]
+pub struct ContactInterface {
+    pub name: String,
+    pub scheme: TractionScheme,
+    /// Coulomb coefficient.
+    pub mu: f64,
+    pub uzawa_tol: f64,
+    pub uzawa_max: usize,
+    penalty_growth: f64,
+    penalty_growth_cap: f64,
+    /// Current multiple of the initial penalties.
+    pub penalty_scale: f64,
+    /// Violation after the previous augmentation of this step (for the penalty growth).
+    last_violation: f64,
+    quadrature_degree: Option<usize>,
+    pub passes: Vec<ContactPass>,
+    /// Rejected and integrated segment pairs of this rank's last evaluation.
+    pub stats: std::cell::RefCell<RejectStats>,
+}
+
+/// Every contact interface of a scene, as this rank sees it.
+#[derive(Clone, Debug, Default)]
+pub struct ContactInterfaces {
+    pub interfaces: Vec<ContactInterface>,
+    rank: usize,
+    node_owner: Vec<usize>,
+    /// Displacements (dof-indexed) of the last converged step.
+    u_old: Vec<f64>,
+}
+
+/// A state saved before a step, to restore when the step is cut.
+#[derive(Clone, Debug)]
+pub struct Saved {
+    states: Vec<Vec<Vec<NodeState>>>,
+    scales: Vec<f64>,
+}
+
+/// The weights of one face pair of one evaluation.
+struct PairData {
+    /// Index of the secondary face in the pass.
+    s: usize,
+    /// Index of the primary face.
+    m: usize,
+    /// Values, and derivatives when the tangent is wanted.
+    w: LinearizedWeights,
+}
+
+/// The forces and (optionally) tangent block of one node, in local slot numbering.
+struct NodeBlock {
+    /// Global nodes of the slots.
+    slots: Vec<usize>,
+    /// Force on each slot dof (`3 slot + c`).
+    force: Vec<f64>,
+    /// Tangent, row-major `3m x 3m` (empty when not wanted).
+    tangent: Vec<f64>,
+}
+
+impl ContactInterfaces {
+    /// Sets up every contact interface: faces, traction nodes, their full integrals and
+    /// penalties, and which faces this rank integrates.
+    pub fn new(scene: &Scene, dofs: &DofMap) -> Result<ContactInterfaces> {
+        let young = crate::contact::tying::young_by_node(scene);
+        let mut interfaces = Vec::new();
+        for iface in scene
+            .interfaces
+            .iter()
+            .filter(|i| i.kind == InterfaceKind::Contact)
+        {
+            let mut passes = Vec::new();
+            for pass in 0..iface.passes {
+                let (sec, pri) = if pass == 0 {
+                    (&iface.secondary, &iface.primary)
+                } else {
+                    (&iface.primary, &iface.secondary)
+                };
+                passes.push(ContactPass::new(scene, dofs, iface, sec, pri, &young)?);
+            }
+            interfaces.push(ContactInterface {
+                name: iface.name.clone(),
+                scheme: iface.scheme,
+                mu: iface.friction,
+                uzawa_tol: iface.uzawa_tol,
+                uzawa_max: iface.uzawa_max,
+                penalty_growth: iface.penalty_growth,
+                penalty_growth_cap: iface.penalty_growth_cap,
+                penalty_scale: 1.0,
+                last_violation: f64::INFINITY,
+                quadrature_degree: iface.quadrature_degree,
+                passes,
+                stats: Default::default(),
+            });
+        }
+        Ok(ContactInterfaces {
+            interfaces,
+            rank: dofs.rank,
+            node_owner: dofs.node_owner.clone(),
+            u_old: vec![0.0; 3 * scene.mesh.num_nodes()],
+        })
+    }
+
+    /// True when the scene has no contact interface.
+    pub fn is_empty(&self) -> bool {
+        self.interfaces.is_empty()
+    }
+
+    /// Every node of every contact surface (whose displacements every rank gathers).
+    pub fn nodes(&self) -> Vec<usize> {
+        let mut n: Vec<usize> = self
+            .interfaces
+            .iter()
+            .flat_map(|i| i.passes.iter())
+            .flat_map(|p| p.sec_faces.iter().chain(&p.pri_faces))
+            .flat_map(|f| f.nodes.iter().copied())
+            .collect();
+        n.sort_unstable();
+        n.dedup();
+        n
+    }
+
+    /// Adds the contact forces of the nodes this rank owns to `f` (not assembled). Returns a
+    /// description of a failure that must cut the step (a degenerate normal), if any.
+    pub fn add_residual(
+        &self,
+        scene: &Scene,
+        dofs: &DofMap,
+        u: &[f64],
+        f: &mut Vector,
+    ) -> Result<Option<String>> {
+        self.assemble(scene, u, false, |block| {
+            let idx = global_dofs(dofs, &block.slots);
+            f.set_values(&idx, &block.force, true)
+        })
+    }
+
+    /// Adds the contact tangent of the nodes this rank owns to `jac` (not assembled).
+    pub fn add_jacobian(
+        &self,
+        scene: &Scene,
+        dofs: &DofMap,
+        u: &[f64],
+        jac: &mut Matrix,
+    ) -> Result<Option<String>> {
+        self.assemble(scene, u, true, |block| {
+            let idx = global_dofs(dofs, &block.slots);
+            jac.add_values(&idx, &idx, &block.tangent)
+        })
+    }
+
+    /// Adds the contact forces of the owned nodes at every dof (constrained ones included)
+    /// into `out` (dof-indexed), for reactions.
+    pub fn add_nodal_forces(&self, scene: &Scene, u: &[f64], out: &mut [f64]) {
+        let _ = self.assemble(scene, u, false, |block| {
+            for (s, &n) in block.slots.iter().enumerate() {
+                for c in 0..3 {
+                    out[3 * n + c] += block.force[3 * s + c];
+                }
+            }
+            Ok(())
+        });
+    }
+
+    /// Evaluates every pass and hands each owned node's block to `sink`.
+    fn assemble(
+        &self,
+        scene: &Scene,
+        u: &[f64],
+        tangent: bool,
+        mut sink: impl FnMut(&NodeBlock) -> Result<()>,
+    ) -> Result<Option<String>> {
+        let x = current_positions(scene, u);
+        let x_old = current_positions(scene, &self.u_old);
+        for iface in &self.interfaces {
+            let mut stats = RejectStats::default();
+            for pass in &iface.passes {
+                let ctx = EvalContext {
+                    iface_mu: iface.mu,
+                    scheme: iface.scheme,
+                    degree: iface.quadrature_degree,
+                    scale: iface.penalty_scale,
+                    x: &x,
+                    x_old: &x_old,
+                };
+                let normals = match pass.normals(&x) {
+                    Ok(n) => n,
+                    Err(e) => return Ok(Some(format!("interface '{}': {e}", iface.name))),
+                };
+                let pairs = pass.integrate(&ctx, &pass.local_faces, tangent, &mut stats);
+                if stats.non_finite > 0 {
+                    return Ok(Some(format!(
+                        "interface '{}': non-finite values in the mortar integration",
+                        iface.name
+                    )));
+                }
+                let by_node = pass.pairs_by_node(&pairs, &pass.owned);
+                for (&a, terms) in &by_node {
+                    let (block, _) = pass.node_block(&ctx, &normals, a, terms, tangent);
+                    if let Some(block) = block {
+                        sink(&block)?;
+                    }
+                }
+            }
+            *iface.stats.borrow_mut() = stats;
+        }
+        Ok(None)
+    }
+
+    /// Fields of every traction node of one pass at displacements `u`, on every rank (owners
+    /// compute, all sum).
+    pub fn pass_fields(
+        &self,
+        scene: &Scene,
+        interface: usize,
+        pass: usize,
+        u: &[f64],
+        world: &SimpleCommunicator,
+    ) -> Vec<NodeFields> {
+        let local = self.local_fields(scene, interface, pass, u);
+        let pass_ref = &self.interfaces[interface].passes[pass];
+        let mut flat = vec![0.0; 15 * pass_ref.nodes.len()];
+        for (i, f) in local {
+            let v = &mut flat[15 * i..15 * i + 15];
+            v[0] = f.area;
+            v[1] = f.gap;
+            v[2] = f.pressure;
+            v[3..6].copy_from_slice(&f.slip);
+            v[6..9].copy_from_slice(&f.traction_t);
+            v[9..12].copy_from_slice(&f.normal);
+            v[12] = f.status as f64;
+        }
+        let mut all = vec![0.0; flat.len()];
+        world.all_reduce_into(&flat[..], &mut all[..], SystemOperation::sum());
+        all.chunks(15)
+            .map(|v| NodeFields {
+                area: v[0],
+                gap: v[1],
+                pressure: v[2],
+                slip: [v[3], v[4], v[5]],
+                traction_t: [v[6], v[7], v[8]],
+                normal: [v[9], v[10], v[11]],
+                status: v[12] as u8,
+            })
+            .collect()
+    }
+
+    /// Fields of the owned traction nodes of one pass, `(index into nodes, fields)`.
+    fn local_fields(
+        &self,
+        scene: &Scene,
+        interface: usize,
+        pass: usize,
+        u: &[f64],
+    ) -> Vec<(usize, NodeFields)> {
+        let iface = &self.interfaces[interface];
+        let p = &iface.passes[pass];
+        let x = current_positions(scene, u);
+        let x_old = current_positions(scene, &self.u_old);
+        let ctx = EvalContext {
+            iface_mu: iface.mu,
+            scheme: iface.scheme,
+            degree: iface.quadrature_degree,
+            scale: iface.penalty_scale,
+            x: &x,
+            x_old: &x_old,
+        };
+        let Ok(normals) = p.normals(&x) else {
+            return Vec::new();
+        };
+        let mut stats = RejectStats::default();
+        let pairs = p.integrate(&ctx, &p.local_faces, false, &mut stats);
+        let by_node = p.pairs_by_node(&pairs, &p.owned);
+        p.owned
+            .iter()
+            .map(|&a| {
+                let fields = match by_node.get(&a) {
+                    Some(terms) => p.node_block(&ctx, &normals, a, terms, false).1,
+                    None => NodeFields {
+                        normal: normals.normal(p.nodes[a]).unwrap_or_default(),
+                        ..Default::default()
+                    },
+                };
+                (a, fields)
+            })
+            .collect()
+    }
+
+    /// Total contact force per interface, summed over passes and ranks:
+    /// `[normal, tangential, fx, fy, fz, stick, slip]`, with `normal = sum_A a_A p_A`,
+    /// `tangential = |sum_A a_A t_T,A|`, `f = sum_A a_A t_A` (the force on the primary side)
+    /// and the numbers of sticking and slipping nodes.
+    pub fn force_sums(
+        &self,
+        scene: &Scene,
+        u: &[f64],
+        world: &SimpleCommunicator,
+    ) -> Vec<[f64; FORCE_SUMS]> {
+        let mut local = Vec::new();
+        for i in 0..self.interfaces.len() {
+            let mut v = [0.0; 9];
+            for p in 0..self.interfaces[i].passes.len() {
+                for (_, nf) in self.local_fields(scene, i, p, u) {
+                    v[0] += nf.area * nf.pressure;
+                    for c in 0..3 {
+                        v[1 + c] += nf.area * nf.traction_t[c];
+                        v[4 + c] += nf.area * (nf.pressure * nf.normal[c] + nf.traction_t[c]);
+                    }
+                    match nf.status {
+                        1 => v[7] += 1.0,
+                        2 => v[8] += 1.0,
+                        _ => {}
+                    }
+                }
+            }
+            local.extend(v);
+        }
+        let mut all = vec![0.0; local.len()];
+        world.all_reduce_into(&local[..], &mut all[..], SystemOperation::sum());
+        all.chunks(9)
+            .map(|v| [v[0], norm(&v[1..4]), v[4], v[5], v[6], v[7], v[8]])
+            .collect()
+    }
+
+    /// Adds the contact blocks of every node to the pattern of the rows this rank owns: the
+    /// pairs found at displacements `u` with the margin [`PATTERN_MARGIN`]. Returns true if the
+    /// pattern grew.
+    pub fn add_sparsity(
+        &self,
+        scene: &Scene,
+        dofs: &DofMap,
+        u: &[f64],
+        sparsity: &mut Sparsity,
+    ) -> bool {
+        let x = current_positions(scene, u);
+        let mut extra: BTreeMap<usize, Vec<PetscInt>> = BTreeMap::new();
+        for pass in self.interfaces.iter().flat_map(|i| i.passes.iter()) {
+            let all_faces: Vec<usize> = (0..pass.sec_faces.len()).collect();
+            let candidates = pass.candidates(&x, &all_faces, PATTERN_MARGIN);
+            // Nodes coupled to each traction node: its faces and their candidate primaries.
+            let mut stencil: Vec<Vec<usize>> = vec![Vec::new(); pass.nodes.len()];
+            for (s, ms) in &candidates {
+                let mut nodes: Vec<usize> = pass.sec_faces[*s].nodes.clone();
+                for &m in ms {
+                    nodes.extend(&pass.pri_faces[m].nodes);
+                }
+                for &a in &pass.carriers[*s] {
+                    stencil[a].extend(&nodes);
+                }
+            }
+            for nodes in &mut stencil {
+                nodes.sort_unstable();
+                nodes.dedup();
+                let cols: Vec<PetscInt> = global_dofs(dofs, nodes)
+                    .into_iter()
+                    .filter(|&g| g >= 0)
+                    .collect();
+                for g in cols.iter().copied() {
+                    let owned = (g as usize) >= dofs.owned_start
+                        && (g as usize) < dofs.owned_start + dofs.owned_count;
+                    if owned {
+                        extra
+                            .entry(g as usize - dofs.owned_start)
+                            .or_default()
+                            .extend(&cols);
+                    }
+                }
+            }
+        }
+        let mut grew = false;
+        for (r, cols) in extra {
+            let row = &mut sparsity.rows[r];
+            let before = row.len();
+            row.extend(cols);
+            row.sort_unstable();
+            row.dedup();
+            grew |= row.len() != before;
+        }
+        grew
+    }
+
+    /// One Uzawa step (collective): every interface whose largest violation exceeds its
+    /// `uzawa_tol` and that has augmentations left (`done < uzawa_max`) updates the
+    /// multipliers of its owned nodes. Returns what happened and the largest violation.
+    pub fn augment(
+        &mut self,
+        scene: &Scene,
+        u: &[f64],
+        done: usize,
+        world: &SimpleCommunicator,
+    ) -> (Augmented, f64) {
+        let mut result = Augmented::Converged;
+        let mut worst = 0.0f64;
+        for i in 0..self.interfaces.len() {
+            let updates = self.uzawa_updates(scene, i, u);
+            let local = updates.iter().map(|u| u.2).fold(0.0, f64::max);
+            let mut violation = 0.0;
+            world.all_reduce_into(&local, &mut violation, SystemOperation::max());
+            worst = worst.max(violation);
+            let iface = &mut self.interfaces[i];
+            if violation <= iface.uzawa_tol || iface.uzawa_max == 0 {
+                continue;
+            }
+            if done >= iface.uzawa_max {
+                if result == Augmented::Converged {
+                    result = Augmented::CapReached;
+                }
+                continue;
+            }
+            for (p, a, _, h) in updates {
+                iface.passes[p].state[a].history = h;
+            }
+            if violation > 0.25 * iface.last_violation && iface.penalty_growth > 1.0 {
+                iface.penalty_scale =
+                    (iface.penalty_scale * iface.penalty_growth).min(iface.penalty_growth_cap);
+            }
+            iface.last_violation = violation;
+            result = Augmented::Updated;
+        }
+        (result, worst)
+    }
+
+    /// The Uzawa update of every owned node of interface `i`: `(pass, node, violation, new
+    /// history)`.
+    fn uzawa_updates(
+        &self,
+        scene: &Scene,
+        i: usize,
+        u: &[f64],
+    ) -> Vec<(usize, usize, f64, NodeHistory)> {
+        let iface = &self.interfaces[i];
+        let mut out = Vec::new();
+        for (p, pass) in iface.passes.iter().enumerate() {
+            for (a, f) in self.local_fields(scene, i, p, u) {
+                let st = &pass.state[a];
+                if f.area <= 0.0 && st.history.lambda_n == 0.0 {
+                    continue;
+                }
+                let prm = pass.law_params(st, iface.mu, iface.penalty_scale);
+                let dsh = if iface.mu > 0.0 { f.slip } else { [0.0; 3] };
+                let new = if f.area > 0.0 {
+                    uzawa_update(&st.history, &prm, f.normal, f.gap, dsh)
+                } else {
+                    // No overlap: nothing to enforce; the multipliers are released.
+                    NodeHistory {
+                        lambda_n: 0.0,
+                        lambda_t: [0.0; 3],
+                        ..st.history
+                    }
+                };
+                // Normal: the size of the multiplier update in gap units (the penetration of a
+                // pressed node, the released multiplier of an open one). Tangential: the slip of
+                // a sticking node (a slipping node has no slip constraint).
+                let dn = (new.lambda_n - st.history.lambda_n).abs() / prm.eps_n;
+                let dt = if iface.mu > 0.0 && f.status == 1 {
+                    norm(&f.slip)
+                } else {
+                    0.0
+                };
+                out.push((p, a, dn.max(dt) / st.h, new));
+            }
+        }
+        out
+    }
+
+    /// Closes a converged step: the tangential tractions, normals and weighted gaps of the
+    /// owned nodes become the history of the next step; `u` becomes the old displacement.
+    pub fn commit(&mut self, scene: &Scene, u: &[f64]) {
+        for i in 0..self.interfaces.len() {
+            let mu = self.interfaces[i].mu;
+            for p in 0..self.interfaces[i].passes.len() {
+                let gaps = self.owned_gaps(scene, i, p, u);
+                let fields = self.local_fields(scene, i, p, u);
+                let pass = &mut self.interfaces[i].passes[p];
+                for (a, f) in fields {
+                    let st = &mut pass.state[a];
+                    st.gap_old = gaps.get(&a).copied();
+                    if mu > 0.0 && f.normal != [0.0; 3] {
+                        st.history = NodeHistory {
+                            lambda_n: st.history.lambda_n,
+                            lambda_t: [0.0; 3],
+                            normal_old: f.normal,
+                            traction_t_old: f.traction_t,
+                        };
+                    }
+                }
+            }
+            self.interfaces[i].last_violation = f64::INFINITY;
+        }
+        self.u_old.copy_from_slice(u);
+    }
+
+    /// Weighted gap vectors of the owned nodes with an overlap above [`MIN_COVERAGE`].
+    fn owned_gaps(
+        &self,
+        scene: &Scene,
+        i: usize,
+        p: usize,
+        u: &[f64],
+    ) -> BTreeMap<usize, [f64; 3]> {
+        let iface = &self.interfaces[i];
+        let pass = &iface.passes[p];
+        let x = current_positions(scene, u);
+        let ctx = EvalContext {
+            iface_mu: iface.mu,
+            scheme: iface.scheme,
+            degree: iface.quadrature_degree,
+            scale: iface.penalty_scale,
+            x: &x,
+            x_old: &x,
+        };
+        let mut stats = RejectStats::default();
+        let pairs = pass.integrate(&ctx, &pass.local_faces, false, &mut stats);
+        pass.pairs_by_node(&pairs, &pass.owned)
+            .into_iter()
+            .filter_map(|(a, terms)| {
+                let k = pass.kinematics(&ctx, &terms);
+                (k.area >= MIN_COVERAGE * pass.state[a].a_full).then_some((a, k.gap))
+            })
+            .collect()
+    }
+
+    /// The state to restore if the coming step is cut.
+    pub fn save(&self) -> Saved {
+        Saved {
+            states: self
+                .interfaces
+                .iter()
+                .map(|i| i.passes.iter().map(|p| p.state.clone()).collect())
+                .collect(),
+            scales: self.interfaces.iter().map(|i| i.penalty_scale).collect(),
+        }
+    }
+
+    /// Restores a state saved by [`ContactInterfaces::save`].
+    pub fn restore(&mut self, saved: &Saved) {
+        for ((iface, states), &scale) in self
+            .interfaces
+            .iter_mut()
+            .zip(&saved.states)
+            .zip(&saved.scales)
+        {
+            for (pass, st) in iface.passes.iter_mut().zip(states) {
+                pass.state.clone_from(st);
+            }
+            iface.penalty_scale = scale;
+            iface.last_violation = f64::INFINITY;
+        }
+    }
+
+    /// The owner rank of each node.
+    pub fn node_owner(&self) -> &[usize] {
+        &self.node_owner
+    }
+
+    /// This rank.
+    pub fn rank(&self) -> usize {
+        self.rank
+    }
+}
+
+/// What one evaluation of a pass needs besides the pass.
+struct EvalContext<'a> {
+    iface_mu: f64,
+    scheme: TractionScheme,
+    degree: Option<usize>,
+    scale: f64,
+    /// Current and last converged positions of every node.
+    x: &'a [[f64; 3]],
+    x_old: &'a [[f64; 3]],
+}
+
+/// Sums of one node's weights.
+struct Kinematics {
+    area: f64,
+    gap: [f64; 3],
+    /// The current weights applied to the old positions (friction only).
+    gap_at_old: [f64; 3],
+}
+
+impl ContactPass {
+    fn new(
+        scene: &Scene,
+        dofs: &DofMap,
+        iface: &Interface,
+        sec: &[FaceRef],
+        pri: &[FaceRef],
+        young: &[f64],
+    ) -> Result<ContactPass> {
+        let mesh = &scene.mesh;
+        let data = |faces: &[FaceRef]| -> Vec<FaceData> {
+            faces
+                .iter()
+                .map(|&f| FaceData {
+                    kind: mesh.face_type(f),
+                    nodes: mesh.face_nodes(f),
+                })
+                .collect()
+        };
+        let sec_faces = data(sec);
+        let pri_faces = data(pri);
+        let mut nodes: Vec<usize> = Vec::new();
+        let mut local_carriers: Vec<Vec<usize>> = Vec::new();
+        for f in &sec_faces {
+            let ks = traction_nodes(f.kind, iface.scheme).map_err(crate::Error::Mesh)?;
+            let global: Vec<usize> = ks.iter().map(|&k| f.nodes[k]).collect();
+            nodes.extend(&global);
+            local_carriers.push(global);
+        }
+        nodes.sort_unstable();
+        nodes.dedup();
+        let index: BTreeMap<usize, usize> =
+            nodes.iter().enumerate().map(|(i, &n)| (n, i)).collect();
+        let carriers: Vec<Vec<usize>> = local_carriers
+            .iter()
+            .map(|g| g.iter().map(|n| index[n]).collect())
+            .collect();
+        let (a_full, sizes) =
+            full_integrals(scene, iface.scheme, &sec_faces, &carriers, nodes.len());
+        let state = nodes
+            .iter()
+            .zip(a_full.iter().zip(&sizes))
+            .map(|(&n, (&a, &h))| NodeState {
+                eps_n: iface.penalty * young[n] / h,
+                eps_t: iface.tangential_penalty * young[n] / h,
+                h,
+                a_full: a,
+                ..Default::default()
+            })
+            .collect();
+        let owned: Vec<usize> = (0..nodes.len())
+            .filter(|&a| dofs.node_owner[nodes[a]] == dofs.rank)
+            .collect();
+        let local_faces: Vec<usize> = (0..sec_faces.len())
+            .filter(|&s| {
+                carriers[s]
+                    .iter()
+                    .any(|&a| dofs.node_owner[nodes[a]] == dofs.rank)
+            })
+            .collect();
+        let surface: std::collections::BTreeSet<usize> = sec_faces
+            .iter()
+            .flat_map(|f| f.nodes.iter().copied())
+            .collect();
+        let symmetry = scene
+            .symmetry
+            .iter()
+            .filter(|(n, _)| surface.contains(n))
+            .copied()
+            .collect();
+        Ok(ContactPass {
+            secondary: sec.to_vec(),
+            sec_faces,
+            pri_faces,
+            nodes,
+            carriers,
+            state,
+            local_faces,
+            owned,
+            symmetry,
+        })
+    }
+
+    fn law_params(&self, st: &NodeState, mu: f64, scale: f64) -> LawParams {
+        LawParams {
+            eps_n: st.eps_n * scale,
+            eps_t: st.eps_t * scale,
+            mu,
+        }
+    }
+
+    /// Nodal normals of the secondary surface at positions `x`.
+    fn normals(&self, x: &[[f64; 3]]) -> std::result::Result<NodalNormals, String> {
+        let faces: Vec<SurfaceFace> = self
+            .sec_faces
+            .iter()
+            .map(|f| SurfaceFace {
+                kind: f.kind,
+                nodes: &f.nodes,
+            })
+            .collect();
+        NodalNormals::compute(&faces, x, &self.symmetry)
+    }
+
+    /// Candidate primary faces (ascending) of each of `faces` (secondary indices) at positions
+    /// `x`, with a search margin of `margin` box diagonals.
+    fn candidates(&self, x: &[[f64; 3]], faces: &[usize], margin: f64) -> Vec<(usize, Vec<usize>)> {
+        let coords = |f: &FaceData| -> Vec<[f64; 3]> { f.nodes.iter().map(|&n| x[n]).collect() };
+        let boxes: Vec<Aabb> = self
+            .pri_faces
+            .iter()
+            .map(|f| Aabb::of_points(&coords(f)))
+            .collect();
+        let tree = PrimaryTree::new(&boxes);
+        let mut found = Vec::new();
+        faces
+            .iter()
+            .map(|&s| {
+                let b = Aabb::of_points(&coords(&self.sec_faces[s]));
+                tree.query(&b.inflated(margin * b.diagonal()), &mut found);
+                let mut ms = found.clone();
+                ms.sort_unstable();
+                (s, ms)
+            })
+            .collect()
+    }
+
+    /// Integrates every candidate pair of `faces`, in canonical order.
+    fn integrate(
+        &self,
+        ctx: &EvalContext,
+        faces: &[usize],
+        tangent: bool,
+        stats: &mut RejectStats,
+    ) -> Vec<PairData> {
+        let mut out = Vec::new();
+        for (s, ms) in self.candidates(ctx.x, faces, EVAL_MARGIN) {
+            let sf = &self.sec_faces[s];
+            let sx: Vec<[f64; 3]> = sf.nodes.iter().map(|&n| ctx.x[n]).collect();
+            for m in ms {
+                let pf = &self.pri_faces[m];
+                let px: Vec<[f64; 3]> = pf.nodes.iter().map(|&n| ctx.x[n]).collect();
+                let mut opts = IntegrationOptions::for_faces(ctx.scheme, sf.kind, pf.kind);
+                if let Some(d) = ctx.degree {
+                    opts.degree = d;
+                }
+                let (sg, pg) = (
+                    FaceGeom {
+                        kind: sf.kind,
+                        x: &sx,
+                    },
+                    FaceGeom {
+                        kind: pf.kind,
+                        x: &px,
+                    },
+                );
+                let w = if tangent {
+                    integrate_pair_linearized(&sg, &pg, &opts, stats)
+                } else {
+                    dense_values(&integrate_pair(&sg, &pg, &opts, stats), sf, pf, ctx.scheme)
+                };
+                if w.area > 0.0 {
+                    out.push(PairData { s, m, w });
+                }
+            }
+        }
+        out
+    }
+
+    /// The pairs carrying each of `nodes` (indices into `self.nodes`), with the traction index
+    /// `k` of the node in the pair's secondary face.
+    fn pairs_by_node<'p>(
+        &self,
+        pairs: &'p [PairData],
+        nodes: &[usize],
+    ) -> BTreeMap<usize, Vec<(&'p PairData, usize)>> {
+        let wanted: std::collections::BTreeSet<usize> = nodes.iter().copied().collect();
+        let mut out: BTreeMap<usize, Vec<(&PairData, usize)>> = BTreeMap::new();
+        for pair in pairs {
+            for (k, &a) in self.carriers[pair.s].iter().enumerate() {
+                if wanted.contains(&a) {
+                    out.entry(a).or_default().push((pair, k));
+                }
+            }
+        }
+        out
+    }
+
+    /// `a_A`, `g_A` and (friction) the current weights on the old positions.
+    fn kinematics(&self, ctx: &EvalContext, terms: &[(&PairData, usize)]) -> Kinematics {
+        let mut k = Kinematics {
+            area: 0.0,
+            gap: [0.0; 3],
+            gap_at_old: [0.0; 3],
+        };
+        let friction = ctx.iface_mu > 0.0;
+        for &(pair, t) in terms {
+            let w = &pair.w;
+            let (sf, pf) = (&self.sec_faces[pair.s], &self.pri_faces[pair.m]);
+            for (b, &n) in sf.nodes.iter().enumerate() {
+                let v = w.n1[t * w.sec_nodes + b];
+                k.area += v;
+                for c in 0..3 {
+                    k.gap[c] += v * ctx.x[n][c];
+                    if friction {
+                        k.gap_at_old[c] += v * ctx.x_old[n][c];
+                    }
+                }
+            }
+            for (cn, &n) in pf.nodes.iter().enumerate() {
+                let v = w.n2[t * w.pri_nodes + cn];
+                for c in 0..3 {
+                    k.gap[c] -= v * ctx.x[n][c];
+                    if friction {
+                        k.gap_at_old[c] -= v * ctx.x_old[n][c];
+                    }
+                }
+            }
+        }
+        k
+    }
+
+    /// Forces (and tangent) of traction node `a` from its pairs `terms`, and its fields.
+    /// `None` when the node carries no traction.
+    fn node_block(
+        &self,
+        ctx: &EvalContext,
+        normals: &NodalNormals,
+        a: usize,
+        terms: &[(&PairData, usize)],
+        tangent: bool,
+    ) -> (Option<NodeBlock>, NodeFields) {
+        let st = &self.state[a];
+        let node = self.nodes[a];
+        let nu = normals.normal(node).unwrap_or_default();
+        let kin = self.kinematics(ctx, terms);
+        let mut fields = NodeFields {
+            normal: nu,
+            ..Default::default()
+        };
+        if kin.area < MIN_COVERAGE * st.a_full {
+            return (None, fields);
+        }
+        let area = kin.area;
+        let gh = dot(nu, kin.gap) / area;
+        let prm = self.law_params(st, ctx.iface_mu, ctx.scale);
+        let (p, dp_dgh) =
+            normal_pressure_touching(st.history.lambda_n, prm.eps_n, gh, TOUCH_TOLERANCE * st.h);
+        let slip_history = ctx.iface_mu > 0.0 && st.gap_old.is_some();
+        let dsh = match st.gap_old {
+            Some(g_old) if slip_history => {
+                std::array::from_fn(|c| (g_old[c] - kin.gap_at_old[c]) / area)
+            }
+            _ => [0.0; 3],
+        };
+        let fr = if ctx.iface_mu > 0.0 && p > 0.0 {
+            friction_traction(&st.history, &prm, nu, p, dsh)
+        } else {
+            no_friction(p)
+        };
+        let t: [f64; 3] = std::array::from_fn(|c| p * nu[c] + fr.traction[c]);
+        fields = NodeFields {
+            area,
+            gap: gh,
+            pressure: p,
+            slip: tangential(dsh, nu),
+            traction_t: fr.traction,
+            normal: nu,
+            status: match fr.status {
+                Status::Open => 0,
+                Status::Stick => 1,
+                Status::Slip => 2,
+            },
+        };
+        if dp_dgh == 0.0 {
+            return (None, fields);
+        }
+        let mut block = Slots::new(self, normals, node, terms);
+        block.add_forces(self, terms, t);
+        if tangent {
+            let lin = Linearization {
+                nu,
+                gap: kin.gap,
+                area,
+                gh,
+                p,
+                dp_dgh,
+                dsh,
+                friction: (ctx.iface_mu > 0.0).then_some(&fr),
+                slip_history,
+            };
+            block.add_tangent(self, ctx, normals, node, terms, &lin, t);
+        }
+        (Some(block.into_block()), fields)
+    }
+}
+
+/// Values at one node that the tangent needs.
+struct Linearization<'a> {
+    nu: [f64; 3],
+    gap: [f64; 3],
+    area: f64,
+    gh: f64,
+    p: f64,
+    dp_dgh: f64,
+    dsh: [f64; 3],
+    /// The return map's result and derivatives (friction only).
+    friction: Option<&'a FrictionResult>,
+    /// The slip is measured (the node had an overlap at the last converged step); otherwise
+    /// it is the constant zero.
+    slip_history: bool,
+}
+
+/// Local numbering of the nodes one traction node couples, with its force and tangent.
+struct Slots {
+    nodes: Vec<usize>,
+    force: Vec<f64>,
+    tangent: Vec<f64>,
+}
+
+impl Slots {
+    /// Slots for every node of the pairs of the node and of its normal's stencil.
+    fn new(
+        pass: &ContactPass,
+        normals: &NodalNormals,
+        node: usize,
+        terms: &[(&PairData, usize)],
+    ) -> Slots {
+        let mut nodes: Vec<usize> = normals.derivative(node).iter().map(|d| d.0).collect();
+        for &(pair, _) in terms {
+            nodes.extend(&pass.sec_faces[pair.s].nodes);
+            nodes.extend(&pass.pri_faces[pair.m].nodes);
+        }
+        nodes.sort_unstable();
+        nodes.dedup();
+        let n = 3 * nodes.len();
+        Slots {
+            nodes,
+            force: vec![0.0; n],
+            tangent: Vec::new(),
+        }
+    }
+
+    fn slot(&self, node: usize) -> usize {
+        self.nodes
+            .binary_search(&node)
+            .expect("contact: node outside its own stencil")
+    }
+
+    /// Column of each pair-local input dof (secondary face nodes, then primary).
+    fn pair_columns(&self, pass: &ContactPass, pair: &PairData) -> Vec<usize> {
+        pass.sec_faces[pair.s]
+            .nodes
+            .iter()
+            .chain(&pass.pri_faces[pair.m].nodes)
+            .flat_map(|&n| {
+                let s = self.slot(n);
+                (0..3).map(move |c| 3 * s + c)
+            })
+            .collect()
+    }
+
+    /// Residual terms: `F_B += n1_AB t`, `F_C -= n2_AC t` (the residual is internal minus
+    /// external force, and the secondary node receives `-n1_AB t`).
+    fn add_forces(&mut self, pass: &ContactPass, terms: &[(&PairData, usize)], t: [f64; 3]) {
+        for &(pair, k) in terms {
+            let w = &pair.w;
+            for (b, &n) in pass.sec_faces[pair.s].nodes.iter().enumerate() {
+                let v = w.n1[k * w.sec_nodes + b];
+                let s = self.slot(n);
+                for (f, tc) in self.force[3 * s..3 * s + 3].iter_mut().zip(t) {
+                    *f += v * tc;
+                }
+            }
+            for (cn, &n) in pass.pri_faces[pair.m].nodes.iter().enumerate() {
+                let v = w.n2[k * w.pri_nodes + cn];
+                let s = self.slot(n);
+                for (f, tc) in self.force[3 * s..3 * s + 3].iter_mut().zip(t) {
+                    *f -= v * tc;
+                }
+            }
+        }
+    }
+
+    /// The tangent block (module docs, "Consistent tangent").
+    #[allow(clippy::too_many_arguments)]
+    fn add_tangent(
+        &mut self,
+        pass: &ContactPass,
+        ctx: &EvalContext,
+        normals: &NodalNormals,
+        node: usize,
+        terms: &[(&PairData, usize)],
+        lin: &Linearization,
+        t: [f64; 3],
+    ) {
+        let n = 3 * self.nodes.len();
+        let friction = lin.friction.is_some();
+        // Differentials (rows of length n): d a, d g, d gt, d nu.
+        let mut da = vec![0.0; n];
+        let mut dg = vec![vec![0.0; n]; 3];
+        let mut dgt = vec![vec![0.0; n]; 3];
+        let mut dnu = vec![vec![0.0; n]; 3];
+        for &(b, m) in normals.derivative(node) {
+            let s = self.slot(b);
+            for i in 0..3 {
+                for j in 0..3 {
+                    dnu[i][3 * s + j] += m[i][j];
+                }
+            }
+        }
+        let mut columns = Vec::with_capacity(terms.len());
+        for &(pair, k) in terms {
+            let w = &pair.w;
+            let cols = self.pair_columns(pass, pair);
+            let nd = w.ndof();
+            let sec = &pass.sec_faces[pair.s].nodes;
+            let pri = &pass.pri_faces[pair.m].nodes;
+            for (b, &nb) in sec.iter().enumerate() {
+                let r = k * w.sec_nodes + b;
+                let (v, dv) = (w.n1[r], &w.dn1[r * nd..(r + 1) * nd]);
+                let s = self.slot(nb);
+                for (j, &col) in cols.iter().enumerate() {
+                    da[col] += dv[j];
+                    for i in 0..3 {
+                        dg[i][col] += dv[j] * ctx.x[nb][i];
+                        if friction {
+                            dgt[i][col] += dv[j] * ctx.x_old[nb][i];
+                        }
+                    }
+                }
+                for i in 0..3 {
+                    dg[i][3 * s + i] += v;
+                }
+            }
+            for (cn, &nc) in pri.iter().enumerate() {
+                let r = k * w.pri_nodes + cn;
+                let (v, dv) = (w.n2[r], &w.dn2[r * nd..(r + 1) * nd]);
+                let s = self.slot(nc);
+                for (j, &col) in cols.iter().enumerate() {
+                    for i in 0..3 {
+                        dg[i][col] -= dv[j] * ctx.x[nc][i];
+                        if friction {
+                            dgt[i][col] -= dv[j] * ctx.x_old[nc][i];
+                        }
+                    }
+                }
+                for i in 0..3 {
+                    dg[i][3 * s + i] -= v;
+                }
+            }
+            columns.push(cols);
+        }
+        // d gh and d p.
+        let dp: Vec<f64> = (0..n)
+            .map(|col| {
+                let dgh = ((0..3)
+                    .map(|i| lin.nu[i] * dg[i][col] + lin.gap[i] * dnu[i][col])
+                    .sum::<f64>()
+                    - lin.gh * da[col])
+                    / lin.area;
+                lin.dp_dgh * dgh
+            })
+            .collect();
+        // d t = nu d p + p d nu + d t_T.
+        let mut dt: Vec<Vec<f64>> = (0..3)
+            .map(|i| {
+                (0..n)
+                    .map(|col| lin.nu[i] * dp[col] + lin.p * dnu[i][col])
+                    .collect()
+            })
+            .collect();
+        if let Some(fr) = lin.friction {
+            for col in 0..n {
+                let ddsh: [f64; 3] = if lin.slip_history {
+                    std::array::from_fn(|i| -(dgt[i][col] + lin.dsh[i] * da[col]) / lin.area)
+                } else {
+                    [0.0; 3]
+                };
+                for (i, row) in dt.iter_mut().enumerate() {
+                    let mut v = fr.d_p[i] * dp[col];
+                    for j in 0..3 {
+                        v += fr.d_dsh[i][j] * ddsh[j] + fr.d_nu[i][j] * dnu[j][col];
+                    }
+                    row[col] += v;
+                }
+            }
+        }
+        // d F_B = d n1_AB t + n1_AB d t, d F_C = -(d n2_AC t + n2_AC d t).
+        self.tangent = vec![0.0; n * n];
+        for (&(pair, k), cols) in terms.iter().zip(&columns) {
+            let w = &pair.w;
+            let nd = w.ndof();
+            let sides = [
+                (
+                    &pass.sec_faces[pair.s].nodes,
+                    &w.n1,
+                    &w.dn1,
+                    w.sec_nodes,
+                    1.0,
+                ),
+                (
+                    &pass.pri_faces[pair.m].nodes,
+                    &w.n2,
+                    &w.dn2,
+                    w.pri_nodes,
+                    -1.0,
+                ),
+            ];
+            for (nodes, vals, ders, count, sign) in sides {
+                for (b, &nb) in nodes.iter().enumerate() {
+                    let r = k * count + b;
+                    let (v, dv) = (vals[r], &ders[r * nd..(r + 1) * nd]);
+                    let s = self.slot(nb);
+                    for i in 0..3 {
+                        let row = &mut self.tangent[(3 * s + i) * n..(3 * s + i + 1) * n];
+                        for (j, &col) in cols.iter().enumerate() {
+                            row[col] += sign * dv[j] * t[i];
+                        }
+                        for (x, d) in row.iter_mut().zip(&dt[i]) {
+                            *x += sign * v * d;
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    fn into_block(self) -> NodeBlock {
+        NodeBlock {
+            slots: self.nodes,
+            force: self.force,
+            tangent: self.tangent,
+        }
+    }
+}
+
+/// The frictionless result: no tangential traction (`Slip` when pressed, as the law reports
+/// `mu = 0`).
+fn no_friction(p: f64) -> FrictionResult {
+    FrictionResult {
+        traction: [0.0; 3],
+        status: if p > 0.0 { Status::Slip } else { Status::Open },
+        trial: [0.0; 3],
+        d_dsh: [[0.0; 3]; 3],
+        d_p: [0.0; 3],
+        d_nu: [[0.0; 3]; 3],
+        history_dropped: false,
+    }
+}
+
+/// Dense values of a pair's weights in the layout of [`LinearizedWeights`] (no derivatives).
+fn dense_values(
+    w: &crate::contact::mortar::PairWeights,
+    sf: &FaceData,
+    pf: &FaceData,
+    scheme: TractionScheme,
+) -> LinearizedWeights {
+    let nt = traction_node_count(sf.kind, scheme);
+    let (ns, np) = (sf.kind.num_nodes(), pf.kind.num_nodes());
+    let mut out = LinearizedWeights {
+        traction_nodes: nt,
+        sec_nodes: ns,
+        pri_nodes: np,
+        n1: vec![0.0; nt * ns],
+        n2: vec![0.0; nt * np],
+        area: w.area,
+        ..Default::default()
+    };
+    for &(k, b, v) in &w.n1 {
+        out.n1[k * ns + b] += v;
+    }
+    for &(k, c, v) in &w.n2 {
+        out.n2[k * np + c] += v;
+    }
+    out
+}
+
+/// `a_full` of every traction node (the integral of its traction function over every
+/// secondary face, reference configuration, per sub-segment so that scheme 3's piecewise
+/// functions are integrated exactly) and `h_A` (the mean square root of the areas of the faces
+/// around it).
+fn full_integrals(
+    scene: &Scene,
+    scheme: TractionScheme,
+    faces: &[FaceData],
+    carriers: &[Vec<usize>],
+    count: usize,
+) -> (Vec<f64>, Vec<f64>) {
+    let mut a = vec![0.0; count];
+    let (mut size_sum, mut size_count) = (vec![0.0; count], vec![0.0; count]);
+    let mut phi = Vec::new();
+    for (f, car) in faces.iter().zip(carriers) {
+        let x: Vec<[f64; 3]> = f.nodes.iter().map(|&n| scene.mesh.coords[n]).collect();
+        let mut face_area = 0.0;
+        for seg in sub_segments(f.kind) {
+            let rule = seg.linear_kind().quadrature(6);
+            let jac = seg.parent_jacobian();
+            for (q, w) in rule.points.iter().zip(&rule.weights) {
+                let xi = seg.to_parent(*q);
+                let (_, j_face) = face_normal(f.kind, &x, xi);
+                traction_shape_on(f.kind, scheme, &seg, xi, &mut phi);
+                face_area += w * jac * j_face;
+                for (k, &node) in car.iter().enumerate() {
+                    a[node] += w * jac * j_face * phi[k];
+                }
+            }
+        }
+        for &node in car {
+            size_sum[node] += face_area.sqrt();
+            size_count[node] += 1.0;
+        }
+    }
+    let h = size_sum
+        .iter()
+        .zip(&size_count)
+        .map(|(s, c)| s / c)
+        .collect();
+    (a, h)
+}
+
+/// Current positions `X + u` of every node.
+fn current_positions(scene: &Scene, u: &[f64]) -> Vec<[f64; 3]> {
+    scene
+        .mesh
+        .coords
+        .iter()
+        .enumerate()
+        .map(|(n, x)| [x[0] + u[3 * n], x[1] + u[3 * n + 1], x[2] + u[3 * n + 2]])
+        .collect()
+}
+
+/// Global dof indices of `nodes` (`3 slot + c` order; -1 where constrained).
+fn global_dofs(dofs: &DofMap, nodes: &[usize]) -> Vec<PetscInt> {
+    nodes
+        .iter()
+        .flat_map(|&n| dofs.global[3 * n..3 * n + 3].iter().copied())
+        .collect()
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn norm(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+/// The part of `v` tangent to the unit normal `nu`.
+fn tangential(v: [f64; 3], nu: [f64; 3]) -> [f64; 3] {
+    let d = dot(v, nu);
+    std::array::from_fn(|c| v[c] - d * nu[c])
+}
