@@ -159,6 +159,8 @@ pub struct Scene {
     /// `(node, axis)` of every symmetry-plane constraint (contact normals drop those
     /// components).
     pub symmetry: Vec<(usize, usize)>,
+    /// Sets whose mean displacement the history tracks, with their nodes.
+    pub tracked: Vec<(String, Vec<usize>)>,
     /// Sets whose reactions are reported, with their constrained dofs.
     pub reaction_sets: BTreeMap<String, Vec<usize>>,
     /// Element quadrature degree, if the scene overrides the per-type default.
@@ -167,6 +169,8 @@ pub struct Scene {
     pub max_cuts: usize,
     /// Consistent load-step predictor on (see `solver`).
     pub predictor: bool,
+    /// Frictional steps start with a stick solve (see `solver`).
+    pub stick_predictor: bool,
     pub newton: crate::io::case_file::NewtonSpec,
     pub vtu_every: usize,
     pub verification: Option<Verification>,
@@ -397,6 +401,13 @@ impl Scene {
                 return Err(err(format!("quadrature_degree = {q}: must be in 1..=10")));
             }
         }
+        let mut tracked = Vec::new();
+        for (i, name) in file.output.track.iter().enumerate() {
+            let nodes = mesh
+                .nodes_of_set(name)
+                .map_err(|e| err(format!("output.track[{i}]: {e}")))?;
+            tracked.push((name.clone(), nodes.to_vec()));
+        }
         let constraints = by_dof.into_values().collect();
         Ok(Scene {
             name,
@@ -410,11 +421,13 @@ impl Scene {
             body_forces,
             interfaces,
             symmetry,
+            tracked,
             reaction_sets,
             quadrature_degree: file.quadrature_degree,
             steps: file.steps.count,
             max_cuts: file.steps.max_cuts,
             predictor: file.steps.predictor,
+            stick_predictor: file.steps.stick_predictor,
             newton: file.newton.clone(),
             vtu_every: file.output.vtu_every,
             verification,
@@ -557,8 +570,8 @@ fn build_interface(
         ));
     }
     let uzawa_max = spec.uzawa_max.unwrap_or(match (kind, spec.passes) {
+        (_, 2) => 0,
         (InterfaceKind::Contact, _) => 10,
-        (InterfaceKind::Tied, 2) => 0,
         (InterfaceKind::Tied, _) => 50,
     });
     Ok(Interface {

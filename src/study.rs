@@ -1,17 +1,18 @@
 //! Convergence studies: one scene run over a list of mesh refinements and variants, in one
-//! process (`mortar study STUDY.toml`), measured against the mesh size.
+//! process (`mortar study STUDY.toml`), measured against the mesh size; optionally, curves of the
+//! runs' load histories compared between variants (force against displacement, say).
 //!
 //! # The study file
 //!
 //! Every key is documented where it is declared ([`StudyFile`], [`RefinementSpec`],
-//! [`VariantSpec`]); unknown keys are errors.
+//! [`VariantSpec`], [`CurvesSpec`]); unknown keys are errors.
 //!
 //! ```toml
 //! case = "case.toml"                 # the base scene, relative to the study file
 //! metric = "energy_error"            # the summary metric measured against h
 //! title = "Thick sphere"             # plot title (optional)
 //!
-//! [[refinement]]                     # at least 2
+//! [[refinement]]                     # at least 2 (at least 1 with [curves])
 //! h = 0.5                            # mesh size for the x axis
 //! set = { "mesh.0.n_circ" = 2, "mesh.0.n_rad" = 2 }
 //!
@@ -20,10 +21,38 @@
 //! set = { "mesh.0.element" = "hex20" }
 //! ```
 //!
+//! A study of load curves, such as the force-displacement curves of sliding blocks (one
+//! refinement, four variants; `metric` is still recorded per run in `study.csv`):
+//!
+//! ```toml
+//! case = "case.toml"
+//! metric = "slip_force_ratio"
+//! title = "Sliding blocks: tangential reaction"
+//!
+//! [[refinement]]
+//! h = 1.0
+//!
+//! [[variant]]
+//! name = "case1"
+//! [[variant]]
+//! name = "case2"
+//! set = { "interface.0.passes" = 1 }
+//!
+//! [curves]                           # compare history.csv curves of the variants
+//! x = "u_upper.zmax_x"               # history.csv columns
+//! y = "reaction_upper.zmax_x"
+//! x_label = "prescribed displacement"  # axis labels (default: the column names)
+//! y_label = "tangential force"
+//! reference = "case1"                # the variant the others are compared with
+//! after = 0.0                        # compare only points with x > after
+//! abs = true                         # plot and compare |y|
+//! ```
+//!
 //! # Edits
 //!
 //! Each run is the base case, then the variant's `set`, then the refinement's `set`, then the
-//! variant's `refinement_set[level]` if it has one (a later setting of the same path wins), applied to the case's TOML table before it is validated
+//! variant's `refinement_set[level]` if it has one (a later setting of the same path wins),
+//! applied to the case's TOML table before it is validated
 //! ([`Scene::load_edited`]). A path is dotted: a segment that is a number indexes an array (of
 //! tables: `mesh.0` is the first `[[mesh]]`), any other names a key of a table. The value
 //! replaces what is there (a table value replaces a whole table). A missing key may be created in
@@ -39,36 +68,57 @@
 //! shares one PETSc: its options are the base case's options file (no variant may change
 //! `petsc_options`) and the command line.
 //!
+//! # Curves
+//!
+//! With `[curves]`, the runs at the **last** refinement level are compared: each variant's
+//! `history.csv` (one row per converged load step) gives the points `(x, y)` of its curve
+//! (`(x, |y|)` with `abs`), in load order. For every variant other than the reference, the
+//! metric `curve_max_rel_diff_<variant>` is the largest, over the reference's points with
+//! `x > after`, of `|y_v(x) - y_ref(x)| / |y_ref(x)|`, where `y_v` is the variant's curve
+//! linearly interpolated at the reference's `x` (its points sorted by x; of several points at
+//! one x, the last in load order). Reference points outside the variant's x range, and those
+//! with `y_ref = 0`, are skipped; when none is left there is no metric. A run that failed or
+//! diverged is still plotted with the points it has (its converged steps) and compared over the
+//! overlap; one that failed before its first step has no points. The column names are checked
+//! against the first run's `history.csv`, so a misspelt one stops the study after one run.
+//!
 //! # Outputs (in `--out DIR`, default `out/<study file stem>`; written by rank 0)
 //!
-//! - `runs/<variant>/<level>/`: each run's own outputs (`level` = index of the refinement).
+//! - `runs/<variant>/<level>/`: each run's own outputs (`level` = index of the refinement). With
+//!   `[curves]`, a `history.csv` left there by an earlier study is removed before the run.
 //! - `study.csv`: one row per run, rewritten after every run: `variant, level, h, error` (the
 //!   metric; empty for a failed run), `seconds` (wall clock), `newton_its` (total over the steps
 //!   that converged), `converged` (`true`/`false`).
 //! - `summary.json` ([`Summary`]): `case` = the study name (the study file's stem), `converged` =
 //!   every run converged, `metrics`: `slope_<variant>` (least-squares slope of log(error)
 //!   against log(h) over the variant's converged runs, when there are two or more) and
-//!   `error_<variant>_<level>`, plus `failed_runs`; `timings.total`; `message` lists the failed
-//!   runs. Rewritten after every run.
+//!   `error_<variant>_<level>`, plus `failed_runs`, and with `[curves]`
+//!   `curve_max_rel_diff_<variant>` (see above, added once every run is done); `timings.total`;
+//!   `message` lists the failed runs. Rewritten after every run.
 //! - `convergence.png`, `convergence.svg`: the log-log plot of error against h, one line per
-//!   variant, the slopes in the legend ([`crate::io::plot`]).
+//!   variant, the slopes in the legend ([`crate::io::plot::loglog`]); only with 2 or more
+//!   refinements.
+//! - With `[curves]`: `curves.png`, `curves.svg`: y against x on linear axes, one line per
+//!   variant (its run at the last level), `title` as the title ([`crate::io::plot::lines`]).
 //!
 //! A failed run (not converged, a bad PETSc option, ...) is recorded (`converged = false`, no
-//! point on the plot) and the study goes on; when any failed, the study returns an error after
-//! writing everything. A metric missing from a converged run's summary stops the study: it
-//! would be missing from every run.
+//! point on the convergence plot) and the study goes on; when any failed, the study returns an
+//! error after writing everything. A metric missing from a converged run's summary stops the
+//! study: it would be missing from every run.
 
 use std::collections::BTreeSet;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use mpi::collective::Root;
+use mpi::topology::Communicator;
 use serde::Deserialize;
 
 use crate::case::Scene;
 use crate::error::{Error, Result};
 use crate::io::case_file::one_line;
-use crate::io::output::{write_atomic, Summary};
+use crate::io::output::{read_csv, write_atomic, Summary};
 use crate::io::plot;
 use crate::petsc::Petsc;
 use crate::solver::{self, RunOptions};
@@ -82,14 +132,48 @@ pub struct StudyFile {
     /// The metric of the runs' `summary.json` measured against h (`energy_error` for the Lamé
     /// sphere).
     pub metric: String,
-    /// Plot title. Default: `<scene name>: <metric>`.
+    /// Plot title (of both plots). Default: `<scene name>: <metric>` for the convergence plot,
+    /// `<scene name>: <y label>` for the curves.
     pub title: Option<String>,
-    /// Mesh refinements, at least 2, each with its mesh size.
+    /// Mesh refinements, at least 2 (for a slope), each with its mesh size; with `[curves]`, at
+    /// least 1.
     #[serde(default)]
     pub refinement: Vec<RefinementSpec>,
     /// Variants (element types, schemes, ...), at least 1: each is run at every refinement.
     #[serde(default)]
     pub variant: Vec<VariantSpec>,
+    /// Curves of the runs' load histories to plot and compare between variants (see the module
+    /// docs). Default: none.
+    pub curves: Option<CurvesSpec>,
+}
+
+/// The `[curves]` table: one curve per variant, from the `history.csv` of its run at the last
+/// refinement level, plotted in `curves.png`/`curves.svg` and compared with the reference
+/// variant's (`curve_max_rel_diff_<variant>` in the study summary; see the module docs). A run
+/// that failed or diverged is plotted with the points it has (its converged steps) and compared
+/// over the overlap.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CurvesSpec {
+    /// The `history.csv` column of the x axis, e.g. `u_upper.zmax_x` (the mean displacement of
+    /// a constrained set along x). A column the runs do not write is an error listing those they
+    /// do.
+    pub x: String,
+    /// The `history.csv` column of the y axis, e.g. `reaction_upper.zmax_z` (the reaction force
+    /// on a constrained set along z).
+    pub y: String,
+    /// The x axis label. Default: the column name `x`.
+    pub x_label: Option<String>,
+    /// The y axis label. Default: the column name `y` (as `|y|` with `abs`).
+    pub y_label: Option<String>,
+    /// The name of the variant the others are compared with (must be one of the variants).
+    pub reference: String,
+    /// Compare only the points with x > `after` (e.g. 0 to leave out a first phase in which x
+    /// stays 0); the plot shows every point. Default: -infinity (every point).
+    pub after: Option<f64>,
+    /// Plot and compare |y| instead of y (a compressive reaction is negative). Default: false.
+    #[serde(default)]
+    pub abs: bool,
 }
 
 /// One mesh refinement.
@@ -137,6 +221,27 @@ pub struct Study {
     pub variants: Vec<VariantSpec>,
     /// The PETSc options file of the base case (shared by every run).
     pub petsc_options: Option<PathBuf>,
+    /// The `[curves]` table, validated.
+    pub curves: Option<Curves>,
+}
+
+/// A validated `[curves]` table ([`CurvesSpec`]), defaults resolved.
+#[derive(Clone, Debug)]
+pub struct Curves {
+    /// The history column of the x axis.
+    pub x: String,
+    /// The history column of the y axis.
+    pub y: String,
+    pub x_label: String,
+    pub y_label: String,
+    /// The reference variant's name.
+    pub reference: String,
+    /// Points with x <= `after` are not compared.
+    pub after: f64,
+    /// Plot and compare |y|.
+    pub abs: bool,
+    /// The curves plot's title.
+    pub title: String,
 }
 
 /// One run of a study, as recorded in `study.csv`.
@@ -179,11 +284,15 @@ impl Study {
         if file.metric.trim().is_empty() {
             return Err(err("metric: empty".into()));
         }
-        if file.refinement.len() < 2 {
+        if file.curves.is_none() && file.refinement.len() < 2 {
             return Err(err(format!(
-                "refinement: at least 2 are needed for a slope, found {}",
+                "refinement: at least 2 are needed for a slope, found {} (a study with [curves] \
+                 may have 1)",
                 file.refinement.len()
             )));
+        }
+        if file.refinement.is_empty() {
+            return Err(err("refinement: at least 1 is needed, found none".into()));
         }
         for (i, r) in file.refinement.iter().enumerate() {
             if !(r.h.is_finite() && r.h > 0.0) {
@@ -220,6 +329,27 @@ impl Study {
                     "variant[{i}].name = \"{}\" is used twice",
                     v.name
                 )));
+            }
+        }
+        if let Some(c) = &file.curves {
+            for (key, column) in [("x", &c.x), ("y", &c.y)] {
+                if column.trim().is_empty() {
+                    return Err(err(format!("curves.{key}: empty (a history.csv column)")));
+                }
+            }
+            if !names.contains(c.reference.as_str()) {
+                return Err(err(format!(
+                    "curves.reference = \"{}\": no such variant (variants: {})",
+                    c.reference,
+                    file.variant
+                        .iter()
+                        .map(|v| v.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )));
+            }
+            if c.after.is_some_and(f64::is_nan) {
+                return Err(err("curves.after: not a number".into()));
             }
         }
         let dir = path.parent().unwrap_or(Path::new(""));
@@ -261,10 +391,33 @@ impl Study {
             refinements: file.refinement,
             variants: file.variant,
             petsc_options: None,
+            curves: None,
         };
         // Every run's scene, built and dropped one at a time.
         let base_scene = Scene::load(&study.case)?;
         study.petsc_options = base_scene.petsc_options.clone();
+        study.curves = file.curves.map(|c| {
+            let y_label = c.y_label.unwrap_or_else(|| {
+                if c.abs {
+                    format!("|{}|", c.y)
+                } else {
+                    c.y.clone()
+                }
+            });
+            Curves {
+                x_label: c.x_label.unwrap_or_else(|| c.x.clone()),
+                title: file
+                    .title
+                    .clone()
+                    .unwrap_or_else(|| format!("{}: {y_label}", base_scene.name)),
+                y_label,
+                x: c.x,
+                y: c.y,
+                reference: c.reference,
+                after: c.after.unwrap_or(f64::NEG_INFINITY),
+                abs: c.abs,
+            }
+        });
         study.title = file
             .title
             .unwrap_or_else(|| format!("{}: {}", base_scene.name, study.metric));
@@ -324,9 +477,15 @@ impl Study {
         ));
         let mut runs: Vec<RunRecord> = Vec::with_capacity(total);
         let mut summary = Summary::default();
+        // The curves' columns, checked against the first history written.
+        let mut columns_checked = self.curves.is_none();
         for (v, variant) in self.variants.iter().enumerate() {
             for (level, refinement) in self.refinements.iter().enumerate() {
                 let run_dir = out.join("runs").join(&variant.name).join(level.to_string());
+                let stale = run_dir.join("history.csv");
+                if rank == 0 && self.curves.is_some() && stale.exists() {
+                    std::fs::remove_file(&stale).map_err(|e| Error::io(&stale, e))?;
+                }
                 let t0 = Instant::now();
                 let result = self.scene(v, level).and_then(|scene| {
                     solver::run(
@@ -388,45 +547,77 @@ impl Study {
                     summary = self.summary(&runs, petsc.size(), started.elapsed().as_secs_f64());
                     summary.write(&out.join("summary.json"))?;
                 }
+                if !columns_checked {
+                    columns_checked = self.check_columns(petsc, &run_dir)?;
+                }
             }
         }
         let failed = runs.iter().filter(|r| !r.converged).count();
         if rank == 0 {
-            let series: Vec<plot::Series> = self
-                .variants
-                .iter()
-                .map(|v| plot::Series {
-                    name: v.name.clone(),
-                    points: points_of(&runs, &v.name),
-                })
-                .collect();
-            let warnings = plot::loglog(
-                &out.join("convergence"),
-                &self.title,
-                "mesh size h",
-                &self.metric,
-                &series,
-            )?;
-            for w in warnings {
-                eprintln!("mortar: warning: {w}");
+            let mut done = Vec::new();
+            if self.refinements.len() >= 2 {
+                let series: Vec<plot::Series> = self
+                    .variants
+                    .iter()
+                    .map(|v| plot::Series {
+                        name: v.name.clone(),
+                        points: points_of(&runs, &v.name),
+                    })
+                    .collect();
+                let warnings = plot::loglog(
+                    &out.join("convergence"),
+                    &self.title,
+                    "mesh size h",
+                    &self.metric,
+                    &series,
+                )?;
+                warn(warnings);
+                let slopes: Vec<String> = self
+                    .variants
+                    .iter()
+                    .map(|v| {
+                        let s = plot::fitted_slope(&points_of(&runs, &v.name));
+                        if s.is_finite() {
+                            format!("{} {s:.3}", v.name)
+                        } else {
+                            format!("{} (none)", v.name)
+                        }
+                    })
+                    .collect();
+                done.push(format!("slopes {}", slopes.join(", ")));
             }
-            let slopes: Vec<String> = self
-                .variants
-                .iter()
-                .map(|v| {
-                    let s = plot::fitted_slope(&points_of(&runs, &v.name));
-                    if s.is_finite() {
-                        format!("{} {s:.3}", v.name)
-                    } else {
-                        format!("{} (none)", v.name)
+            if let Some(curves) = &self.curves {
+                let diffs = self.write_curves(curves, out)?;
+                for (name, d) in &diffs {
+                    if let Some(d) = d {
+                        summary
+                            .metrics
+                            .insert(format!("curve_max_rel_diff_{name}"), *d);
                     }
-                })
-                .collect();
+                }
+                summary.write(&out.join("summary.json"))?;
+                let diffs: Vec<String> = diffs
+                    .iter()
+                    .map(|(name, d)| match d {
+                        Some(d) => format!("{name} {d:.3e}"),
+                        None => format!("{name} (none)"),
+                    })
+                    .collect();
+                done.push(format!(
+                    "curves: largest relative difference to {}: {}",
+                    curves.reference,
+                    if diffs.is_empty() {
+                        "(no other variant)".to_string()
+                    } else {
+                        diffs.join(", ")
+                    }
+                ));
+            }
+            done.push(format!("{} of {total} runs converged", total - failed));
             say(format!(
-                "mortar study {}: slopes {}; {} of {total} runs converged -> {}",
+                "mortar study {}: {} -> {}",
                 self.name,
-                slopes.join(", "),
-                total - failed,
+                done.join("; "),
                 out.display()
             ));
         }
@@ -449,6 +640,105 @@ impl Study {
             )));
         }
         Ok(StudyReport { runs, summary })
+    }
+
+    /// Checks the `[curves]` columns against the `history.csv` in `run_dir` (rank 0), and
+    /// shares the verdict with every rank: false if there is no history yet (the run failed
+    /// before its first step), true if the columns are there; an error on every rank (naming the
+    /// study file, the key and the column on rank 0) if one is missing.
+    fn check_columns(&self, petsc: &Petsc, run_dir: &Path) -> Result<bool> {
+        let Some(curves) = &self.curves else {
+            return Ok(true);
+        };
+        // 0: no history yet, 1: the columns are there, 2: they are not (`message`).
+        let mut verdict = 0i32;
+        let mut message = String::new();
+        let history = run_dir.join("history.csv");
+        if petsc.rank() == 0 && history.is_file() {
+            verdict = 1;
+            let found = read_csv(&history)
+                .map_err(|e| format!("curves: cannot read {}: {e}", history.display()))
+                .and_then(|(columns, _)| curves.find_columns(&history, &columns));
+            if let Err(m) = found {
+                message = m;
+                verdict = 2;
+            }
+        }
+        petsc
+            .world()
+            .process_at_rank(0)
+            .broadcast_into(&mut verdict);
+        match verdict {
+            0 => Ok(false),
+            1 => Ok(true),
+            // Every rank stops; rank 0 prints its message.
+            _ => Err(Error::Case {
+                file: self.file.clone(),
+                msg: message,
+            }),
+        }
+    }
+
+    /// Reads every variant's curve at the last level, writes `curves.png` and `curves.svg`
+    /// (rank 0), and returns the largest relative difference of every variant but the
+    /// reference to the reference (see the module docs), in variant order.
+    fn write_curves(&self, curves: &Curves, out: &Path) -> Result<Vec<(String, Option<f64>)>> {
+        let level = self.refinements.len() - 1;
+        let mut series = Vec::with_capacity(self.variants.len());
+        for v in &self.variants {
+            let history = out
+                .join("runs")
+                .join(&v.name)
+                .join(level.to_string())
+                .join("history.csv");
+            let points = if history.is_file() {
+                let (columns, rows) = read_csv(&history)?;
+                let (ix, iy) =
+                    curves
+                        .find_columns(&history, &columns)
+                        .map_err(|msg| Error::Case {
+                            file: self.file.clone(),
+                            msg,
+                        })?;
+                rows.iter()
+                    .map(|r| (r[ix], if curves.abs { r[iy].abs() } else { r[iy] }))
+                    .collect()
+            } else {
+                eprintln!(
+                    "mortar: warning: curves: variant '{}' has no {} (no converged step): no \
+                     curve",
+                    v.name,
+                    history.display()
+                );
+                Vec::new()
+            };
+            series.push(plot::Series {
+                name: v.name.clone(),
+                points,
+            });
+        }
+        warn(plot::lines(
+            &out.join("curves"),
+            &curves.title,
+            &curves.x_label,
+            &curves.y_label,
+            &series,
+        )?);
+        let reference = series
+            .iter()
+            .find(|s| s.name == curves.reference)
+            .map(|s| s.points.clone())
+            .unwrap_or_default();
+        Ok(series
+            .iter()
+            .filter(|s| s.name != curves.reference)
+            .map(|s| {
+                (
+                    s.name.clone(),
+                    max_rel_diff(&reference, &s.points, curves.after),
+                )
+            })
+            .collect())
     }
 
     /// The study summary of the runs so far.
@@ -490,6 +780,86 @@ impl Study {
             s.message = Some(format!("failed runs: {}", failed.join("; ")));
         }
         s
+    }
+}
+
+impl Curves {
+    /// The indices of the x and y columns in `columns` (read from `history`); if one is missing,
+    /// a message naming the key and the column and listing the columns.
+    fn find_columns(
+        &self,
+        history: &Path,
+        columns: &[String],
+    ) -> std::result::Result<(usize, usize), String> {
+        let find = |key: &str, name: &str| {
+            columns.iter().position(|c| c == name).ok_or_else(|| {
+                format!(
+                    "curves.{key} = \"{name}\": no such column in {} (its columns: {})",
+                    history.display(),
+                    columns.join(", ")
+                )
+            })
+        };
+        Ok((find("x", &self.x)?, find("y", &self.y)?))
+    }
+}
+
+/// The largest `|y_v(x) - y_ref(x)| / |y_ref(x)|` over the `reference` points with `x > after`,
+/// `y_v` the `other` curve linearly interpolated at `x` ([`interpolate`]); reference points
+/// outside the other curve's x range, or with `y_ref = 0`, are skipped. `None` if no point is
+/// compared.
+fn max_rel_diff(reference: &[(f64, f64)], other: &[(f64, f64)], after: f64) -> Option<f64> {
+    let curve = by_x(other);
+    reference
+        .iter()
+        .filter(|&&(x, y)| x > after && y != 0.0 && x.is_finite() && y.is_finite())
+        .filter_map(|&(x, y)| interpolate(&curve, x).map(|yv| (yv - y).abs() / y.abs()))
+        .filter(|d| d.is_finite())
+        .fold(None, |max: Option<f64>, d| {
+            Some(max.map_or(d, |m| m.max(d)))
+        })
+}
+
+/// The finite `points` sorted by x; of several points at one x, the last (in the given order).
+fn by_x(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
+    let mut sorted: Vec<(f64, f64)> = points
+        .iter()
+        .copied()
+        .filter(|(x, y)| x.is_finite() && y.is_finite())
+        .collect();
+    // A stable sort: points at one x stay in their order.
+    sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut out: Vec<(f64, f64)> = Vec::with_capacity(sorted.len());
+    for p in sorted {
+        match out.last_mut() {
+            Some(last) if last.0 == p.0 => *last = p,
+            _ => out.push(p),
+        }
+    }
+    out
+}
+
+/// The curve through `curve` (sorted by x, each x once: [`by_x`]) at `x`, linearly
+/// interpolated; `None` outside its x range.
+fn interpolate(curve: &[(f64, f64)], x: f64) -> Option<f64> {
+    let (first, last) = (curve.first()?, curve.last()?);
+    if x < first.0 || x > last.0 {
+        return None;
+    }
+    let i = curve.partition_point(|p| p.0 < x);
+    let b = curve[i];
+    if b.0 == x {
+        return Some(b.1);
+    }
+    // x > first.0, so i >= 1.
+    let a = curve[i - 1];
+    Some(a.1 + (x - a.0) / (b.0 - a.0) * (b.1 - a.1))
+}
+
+/// Prints plot warnings.
+fn warn(warnings: Vec<String>) {
+    for w in warnings {
+        eprintln!("mortar: warning: {w}");
     }
 }
 
@@ -767,5 +1137,56 @@ count = 1
              hex8,1,0.5,0.125,2.5,1,true\n\
              hex8,1,0.5,,2.5,1,false\n"
         );
+    }
+
+    #[test]
+    fn curve_differences_interpolate_over_the_overlap() {
+        let ninf = f64::NEG_INFINITY;
+        let reference = [(0.0, 1.0), (1.0, 2.0), (2.0, 4.0), (3.0, 8.0)];
+        // Between its points the other curve is linear: 2.625 at x = 1, 4.875 at x = 2; x = 0
+        // and x = 3 are outside its range.
+        let other = [(0.5, 1.5), (2.5, 6.0)];
+        assert_eq!(max_rel_diff(&reference, &other, ninf), Some(0.3125));
+        // Only x > after.
+        assert_eq!(max_rel_diff(&reference, &other, 1.0), Some(0.21875));
+        assert_eq!(max_rel_diff(&reference, &other, 2.0), None);
+        // The same points: zero; in any order, of any sign.
+        assert_eq!(max_rel_diff(&reference, &reference, ninf), Some(0.0));
+        let neg: Vec<(f64, f64)> = reference.iter().rev().map(|p| (-p.0, -p.1)).collect();
+        let twice: Vec<(f64, f64)> = neg.iter().map(|p| (p.0, 2.0 * p.1)).collect();
+        assert_eq!(max_rel_diff(&neg, &twice, ninf), Some(1.0));
+        // No overlap, no points, or only y_ref = 0: nothing to compare.
+        assert_eq!(
+            max_rel_diff(&reference, &[(5.0, 1.0), (6.0, 1.0)], ninf),
+            None
+        );
+        assert_eq!(max_rel_diff(&reference, &[], ninf), None);
+        assert_eq!(max_rel_diff(&[], &reference, ninf), None);
+        assert_eq!(max_rel_diff(&[(1.0, 0.0)], &reference, ninf), None);
+        // One point of the other curve: compared at that x only.
+        assert_eq!(max_rel_diff(&reference, &[(1.0, 3.0)], ninf), Some(0.5));
+    }
+
+    #[test]
+    fn curves_keep_the_last_point_at_one_x() {
+        // A first phase at x = 0 (compression before sliding), then x grows.
+        let pts = [
+            (0.0, 0.0),
+            (0.0, 5.0),
+            (0.0, 10.0),
+            (0.5, 12.0),
+            (1.0, f64::NAN),
+        ];
+        let curve = by_x(&pts);
+        assert_eq!(curve, vec![(0.0, 10.0), (0.5, 12.0)]);
+        assert_eq!(interpolate(&curve, 0.0), Some(10.0));
+        assert_eq!(interpolate(&curve, 0.25), Some(11.0));
+        assert_eq!(interpolate(&curve, 0.5), Some(12.0));
+        assert_eq!(interpolate(&curve, 0.6), None);
+        assert_eq!(interpolate(&curve, -0.1), None);
+        assert_eq!(interpolate(&[], 0.0), None);
+        // Unsorted input.
+        let curve = by_x(&[(2.0, 4.0), (0.0, 0.0), (1.0, 1.0)]);
+        assert_eq!(interpolate(&curve, 1.5), Some(2.5));
     }
 }

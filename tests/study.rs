@@ -1,5 +1,6 @@
 //! `mortar study`: a small convergence study of the thick sphere (Hex8 and Hex20, n = 2, 3; small
-//! enough for a debug build), a study with an impossible path, and a study with failing runs.
+//! enough for a debug build), a study with an impossible path, a study with failing runs, and
+//! `[curves]` studies of a one-element block (reaction against prescribed displacement).
 
 mod common;
 
@@ -233,4 +234,238 @@ set = { "mesh.0.element" = "hex8" }
     assert_eq!(s["metrics"]["failed_runs"].as_f64(), Some(2.0));
     assert!(s["message"].as_str().unwrap().contains("stuck level 0"));
     assert!(out.join("convergence.png").is_file() && out.join("convergence.svg").is_file());
+}
+
+/// A fresh folder with `case.toml` = a one-element Neo-Hookean block (E = 100, nu = 0.3)
+/// compressed along z by 0.2 in 4 steps, free to expand sideways, and `study.toml` = `study`.
+/// The deformation is homogeneous, so the reaction is exactly proportional to E.
+fn block_study_dir(name: &str, study: &str) -> PathBuf {
+    let dir = common::fresh_dir(name);
+    let case = common::compressed_block("hex8", 0.2, 4)
+        .replace("divisions = [3, 3, 3]", "divisions = [1, 1, 1]");
+    assert!(case.contains("divisions = [1, 1, 1]"));
+    std::fs::write(dir.join("case.toml"), case).unwrap();
+    std::fs::write(dir.join("study.toml"), study).unwrap();
+    dir
+}
+
+/// A study of the block: `metric`, the given refinements, variants `soft` (the base case, the
+/// reference) and `stiff` (E doubled) and more, and `[curves]` of the reaction on the top face
+/// against its prescribed displacement (both negative; compared as |reaction|), plus `curves`.
+fn block_study(refinements: &str, variants: &str, curves: &str) -> String {
+    format!(
+        r#"
+case = "case.toml"
+metric = "total_newton_its"
+title = "Block (test)"
+{refinements}
+
+[[variant]]
+name = "soft"
+
+[[variant]]
+name = "stiff"
+set = {{ "material.0.young" = 200.0 }}
+{variants}
+
+[curves]
+x = "u_b.zmax_z"
+y = "reaction_b.zmax_z"
+reference = "soft"
+abs = true
+{curves}
+"#
+    )
+}
+
+const ONE_REFINEMENT: &str = "[[refinement]]\nh = 1.0\n";
+
+/// `curve_max_rel_diff_<variant>` from the study summary.
+fn curve_diff(out: &Path, variant: &str) -> Option<f64> {
+    common::summary(out)["metrics"][format!("curve_max_rel_diff_{variant}")].as_f64()
+}
+
+/// Markers of the first series (circles) in an SVG plot, less the legend's.
+fn first_series_markers(svg: &str) -> usize {
+    let legend = usize::from(svg.contains("<text"));
+    svg.matches("<circle").count() - legend
+}
+
+#[test]
+fn curves_compare_variants_at_the_last_level() {
+    // Level 0 in 2 steps, level 1 in 4: the curves are those of level 1.
+    let refinements = r#"
+[[refinement]]
+h = 1.0
+set = { "steps.count" = 2 }
+
+[[refinement]]
+h = 0.5
+set = { "steps.count" = 4 }
+"#;
+    let dir = block_study_dir(
+        "study_curves",
+        &block_study(refinements, "", "x_label = \"top displacement\""),
+    );
+    let o = run_study(&dir, &[]);
+    let (stdout, stderr) = (text(&o.stdout), text(&o.stderr));
+    assert!(o.status.success(), "stdout:\n{stdout}\nstderr:\n{stderr}");
+    assert!(
+        stdout.contains("curves: largest relative difference to soft: stiff 1.000e0"),
+        "{stdout}"
+    );
+    let out = dir.join("out");
+    assert_eq!(csv_rows(&out).len(), 4);
+
+    let png = std::fs::read(out.join("curves.png")).unwrap();
+    assert!(png.len() > 1000 && png.starts_with(b"\x89PNG\r\n\x1a\n"));
+    let svg = std::fs::read_to_string(out.join("curves.svg")).unwrap();
+    assert!(svg.contains("<svg"));
+    assert_eq!(first_series_markers(&svg), 4, "the 4 steps of level 1");
+    if svg.contains("<text") {
+        for label in ["Block (test)", "top displacement", "|reaction_b.zmax_z|"] {
+            assert!(svg.contains(&format!("\n{label}\n")), "no {label}");
+        }
+        // abs: the compressive (negative) reaction is plotted positive, up to 48.
+        assert!(svg.contains("\n40\n") && !svg.contains("\n-40\n"));
+    }
+    // Two refinements: the convergence plot and the slopes too.
+    assert!(out.join("convergence.png").is_file() && out.join("convergence.svg").is_file());
+    let s = common::summary(&out);
+    assert_eq!(s["converged"], true);
+    assert!(s["metrics"]["slope_soft"].as_f64().is_some(), "{s}");
+
+    // E doubled: the reaction doubles at every prescribed displacement.
+    let d = curve_diff(&out, "stiff").expect("curve_max_rel_diff_stiff");
+    assert!((d - 1.0).abs() < 1e-9, "{d}");
+    assert_eq!(
+        curve_diff(&out, "soft"),
+        None,
+        "the reference has no metric"
+    );
+    // The same from the runs' own histories.
+    let last = |v: &str| {
+        let h = std::fs::read_to_string(out.join(format!("runs/{v}/1/history.csv"))).unwrap();
+        let mut lines = h.lines();
+        let cols: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let k = cols.iter().position(|&c| c == "reaction_b.zmax_z").unwrap();
+        let rows: Vec<f64> = lines
+            .map(|l| l.split(',').nth(k).unwrap().parse().unwrap())
+            .collect();
+        assert_eq!(rows.len(), 4);
+        rows
+    };
+    for (soft, stiff) in last("soft").iter().zip(last("stiff")) {
+        assert!(*soft < 0.0 && ((stiff - soft) / soft - 1.0).abs() < 1e-9);
+    }
+}
+
+#[test]
+fn curves_of_a_failed_run_hold_its_converged_steps() {
+    // "crushed": the first two steps as the others (-0.05, -0.1), then a step to -1.05 that
+    // inverts the element, with no cuts: it fails at step 3 with two converged steps.
+    let crushed = r#"
+[[variant]]
+name = "crushed"
+set = { "dirichlet.0.value" = [-2.0], "dirichlet.0.curve" = { kind = "table", table = [[0.0, 0.0], [0.5, 0.05], [1.0, 1.0]] }, "steps.max_cuts" = 0 }
+"#;
+    let dir = block_study_dir(
+        "study_curves_failed",
+        &block_study(ONE_REFINEMENT, crushed, ""),
+    );
+    let o = run_study(&dir, &["-q"]);
+    let (stdout, stderr) = (text(&o.stdout), text(&o.stderr));
+    assert!(!o.status.success(), "{stdout}");
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert_eq!(lines.len(), 1, "{stderr}");
+    assert!(lines[0].contains("1 of 3 runs failed"), "{stderr}");
+    let out = dir.join("out");
+    let rows = csv_rows(&out);
+    assert_eq!(rows.len(), 3);
+    assert_eq!(rows[2][6], "false", "{rows:?}");
+
+    // Plotted with its two points, compared where it overlaps the reference (-0.05, -0.1):
+    // there it is the reference.
+    let svg = std::fs::read_to_string(out.join("curves.svg")).unwrap();
+    assert!(out.join("curves.png").is_file());
+    if svg.contains("<text") {
+        assert!(svg.contains("\ncrushed\n") && !svg.contains("no points"));
+    }
+    let s = common::summary(&out);
+    assert_eq!(s["converged"], false);
+    assert_eq!(s["metrics"]["failed_runs"].as_f64(), Some(1.0));
+    let d = curve_diff(&out, "crushed").expect("curve_max_rel_diff_crushed");
+    assert!(d < 1e-9, "{d}");
+    assert!((curve_diff(&out, "stiff").unwrap() - 1.0).abs() < 1e-9);
+    // One refinement: no slope, no convergence plot.
+    assert!(s["metrics"].get("slope_soft").is_none(), "{s}");
+    assert!(!out.join("convergence.png").exists());
+}
+
+#[test]
+fn bad_curve_column_stops_the_study_after_one_run() {
+    let dir = block_study_dir(
+        "study_curves_bad_column",
+        &block_study(ONE_REFINEMENT, "", "")
+            .replace("y = \"reaction_b.zmax_z\"", "y = \"reaction_b.zmax_w\""),
+    );
+    let o = run_study(&dir, &["-q"]);
+    let stderr = text(&o.stderr);
+    assert!(!o.status.success());
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert_eq!(lines.len(), 1, "{stderr}");
+    let line = lines[0];
+    assert!(line.starts_with("mortar: error: "), "{stderr}");
+    for part in [
+        "study.toml",
+        "curves.y = \"reaction_b.zmax_w\": no such column",
+        "history.csv",
+        "reaction_b.zmax_z, ",
+        "u_b.zmax_z",
+    ] {
+        assert!(line.contains(part), "no '{part}' in: {stderr}");
+    }
+    let out = dir.join("out");
+    assert!(out.join("runs/soft/0/history.csv").is_file());
+    assert!(!out.join("runs/stiff").exists(), "no run after the first");
+}
+
+#[test]
+fn one_refinement_needs_curves_and_curves_keys_are_checked() {
+    let expect_error = |name: &str, study: &str, parts: &[&str]| {
+        let dir = block_study_dir(name, study);
+        let o = run_study(&dir, &["-q"]);
+        let stderr = text(&o.stderr);
+        assert!(!o.status.success(), "{name}");
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        assert!(stderr.starts_with("mortar: error: "), "{stderr}");
+        for part in parts {
+            assert!(stderr.contains(part), "no '{part}' in: {stderr}");
+        }
+        assert!(!dir.join("out").exists(), "nothing runs before validation");
+    };
+    // Without [curves] a single refinement is refused (with it, the other tests run one).
+    let study = block_study(ONE_REFINEMENT, "", "");
+    let without = &study[..study.find("[curves]").unwrap()];
+    expect_error(
+        "study_curves_one_refinement",
+        without,
+        &["study.toml", "refinement: at least 2", "found 1"],
+    );
+    expect_error(
+        "study_curves_unknown_key",
+        &block_study(ONE_REFINEMENT, "", "colour = \"red\""),
+        &["study.toml", "colour"],
+    );
+    expect_error(
+        "study_curves_bad_reference",
+        &block_study(ONE_REFINEMENT, "", "")
+            .replace("reference = \"soft\"", "reference = \"hard\""),
+        &["curves.reference = \"hard\": no such variant (variants: soft, stiff)"],
+    );
+    expect_error(
+        "study_curves_nan_after",
+        &block_study(ONE_REFINEMENT, "", "after = nan"),
+        &["curves.after"],
+    );
 }

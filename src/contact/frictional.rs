@@ -70,6 +70,14 @@
 //! `penalty_growth > 1`, an augmentation that did not bring the violation below a quarter of the
 //! previous one multiplies both penalties by that factor, up to `penalty_growth_cap`.
 //!
+//! # Stick predictor
+//!
+//! With [`ContactInterfaces::set_stick_all`] every pressed node sticks whatever its cone (the
+//! law is called with `mu = infinity`): a smooth problem whose solution is a good start for the
+//! Coulomb law, because the nodes that truly stick are already in place and those that slip
+//! start from the direction of the tangential traction that sticking would need. The solver uses
+//! it when `steps.stick_predictor` is set.
+//!
 //! # Parallel layout
 //!
 //! The mesh is replicated and every rank gathers the displacements of every contact surface
@@ -223,6 +231,8 @@ pub struct ContactInterfaces {
     node_owner: Vec<usize>,
     /// Displacements (dof-indexed) of the last converged step.
     u_old: Vec<f64>,
+    /// Every pressed node sticks (the stick predictor), whatever its Coulomb cone.
+    stick_all: std::cell::Cell<bool>,
 }
 
 /// A state saved before a step, to restore when the step is cut.
@@ -292,7 +302,18 @@ impl ContactInterfaces {
             rank: dofs.rank,
             node_owner: dofs.node_owner.clone(),
             u_old: vec![0.0; 3 * scene.mesh.num_nodes()],
+            stick_all: Default::default(),
         })
+    }
+
+    /// True when a contact interface has friction.
+    pub fn has_friction(&self) -> bool {
+        self.interfaces.iter().any(|i| i.mu > 0.0)
+    }
+
+    /// Switches the stick predictor on or off (module docs, "Stick predictor").
+    pub fn set_stick_all(&self, on: bool) {
+        self.stick_all.set(on);
     }
 
     /// True when the scene has no contact interface.
@@ -371,6 +392,7 @@ impl ContactInterfaces {
             for pass in &iface.passes {
                 let ctx = EvalContext {
                     iface_mu: iface.mu,
+                    stick_all: self.stick_all.get(),
                     scheme: iface.scheme,
                     degree: iface.quadrature_degree,
                     scale: iface.penalty_scale,
@@ -453,6 +475,7 @@ impl ContactInterfaces {
         let x_old = current_positions(scene, &self.u_old);
         let ctx = EvalContext {
             iface_mu: iface.mu,
+            stick_all: self.stick_all.get(),
             scheme: iface.scheme,
             degree: iface.quadrature_degree,
             scale: iface.penalty_scale,
@@ -482,8 +505,9 @@ impl ContactInterfaces {
 
     /// Total contact force per interface, summed over passes and ranks:
     /// `[normal, tangential, fx, fy, fz, stick, slip]`, with `normal = sum_A a_A p_A`,
-    /// `tangential = |sum_A a_A t_T,A|`, `f = sum_A a_A t_A` (the force on the primary side)
-    /// and the numbers of sticking and slipping nodes.
+    /// `tangential = |sum_A a_A t_T,A|`, `f = sum_A a_A t_A` (the force on the primary side of
+    /// the first pass; the second pass's terms enter with the opposite sign, its sides being
+    /// swapped) and the numbers of sticking and slipping nodes.
     pub fn force_sums(
         &self,
         scene: &Scene,
@@ -494,11 +518,15 @@ impl ContactInterfaces {
         for i in 0..self.interfaces.len() {
             let mut v = [0.0; 9];
             for p in 0..self.interfaces[i].passes.len() {
+                // Forces on the primary side of the first pass: the second pass's primary is
+                // the first pass's secondary.
+                let sign = if p == 0 { 1.0 } else { -1.0 };
                 for (_, nf) in self.local_fields(scene, i, p, u) {
                     v[0] += nf.area * nf.pressure;
                     for c in 0..3 {
-                        v[1 + c] += nf.area * nf.traction_t[c];
-                        v[4 + c] += nf.area * (nf.pressure * nf.normal[c] + nf.traction_t[c]);
+                        v[1 + c] += sign * nf.area * nf.traction_t[c];
+                        v[4 + c] +=
+                            sign * nf.area * (nf.pressure * nf.normal[c] + nf.traction_t[c]);
                     }
                     match nf.status {
                         1 => v[7] += 1.0,
@@ -697,6 +725,7 @@ impl ContactInterfaces {
         let x = current_positions(scene, u);
         let ctx = EvalContext {
             iface_mu: iface.mu,
+            stick_all: self.stick_all.get(),
             scheme: iface.scheme,
             degree: iface.quadrature_degree,
             scale: iface.penalty_scale,
@@ -756,6 +785,8 @@ impl ContactInterfaces {
 /// What one evaluation of a pass needs besides the pass.
 struct EvalContext<'a> {
     iface_mu: f64,
+    /// The stick predictor is on: pressed nodes stick whatever their cone.
+    stick_all: bool,
     scheme: TractionScheme,
     degree: Option<usize>,
     scale: f64,
@@ -1028,7 +1059,15 @@ impl ContactPass {
             _ => [0.0; 3],
         };
         let fr = if ctx.iface_mu > 0.0 && p > 0.0 {
-            friction_traction(&st.history, &prm, nu, p, dsh)
+            let law = if ctx.stick_all {
+                LawParams {
+                    mu: f64::INFINITY,
+                    ..prm
+                }
+            } else {
+                prm
+            };
+            friction_traction(&st.history, &law, nu, p, dsh)
         } else {
             no_friction(p)
         };

@@ -256,10 +256,11 @@ pub struct InterfaceSpec {
     /// penetration gh_A of every pressed node and the slip |dsh_A| of every sticking node;
     /// default 1e-6.
     pub uzawa_tol: Option<f64>,
-    /// At most this many augmentations per load step (0: plain penalty). Tied: default 50 for
-    /// one pass and 0 for two passes (on dissimilar meshes the two passes' weak continuity
-    /// conditions cannot both hold exactly, so augmenting them drives the interface into
-    /// locking; two passes are a penalty method). Contact: default 10.
+    /// At most this many augmentations per load step (0: plain penalty). Default 0 for two
+    /// passes: on dissimilar meshes the two passes' weak conditions cannot both hold exactly,
+    /// so augmenting them drives a tied interface into locking and never meets a contact
+    /// tolerance (measured on the sliding blocks: the cap of 10 hit in every step); two passes
+    /// are a penalty method. One pass: 50 tied, 10 contact.
     pub uzawa_max: Option<usize>,
     /// Degree of the triangle rule on each integration pallet. Default 8 for quadratic faces,
     /// 4 for linear ones.
@@ -296,6 +297,14 @@ pub struct StepsSpec {
     /// converged state. Default true.
     #[serde(default = "yes")]
     pub predictor: bool,
+    /// Frictional contact: start each step with a Newton solve (at most 6 iterations) in which
+    /// every pressed node sticks, then release the Coulomb law from its solution. Default
+    /// false. Measured on the sliding blocks (Hex27, one pass): with full Newton steps
+    /// (`-snes_linesearch_type basic`) it makes every step converge (without it the first step
+    /// fails at every cut) and takes at most 14 Newton iterations per step; with the default
+    /// backtracking it does not pay off, and on two passes it costs many cut steps.
+    #[serde(default)]
+    pub stick_predictor: bool,
 }
 
 impl Default for StepsSpec {
@@ -304,6 +313,7 @@ impl Default for StepsSpec {
             count: 1,
             max_cuts: 6,
             predictor: true,
+            stick_predictor: false,
         }
     }
 }
@@ -368,6 +378,10 @@ pub struct OutputSpec {
     /// Sets whose reaction forces go into the history (node or face sets with constrained
     /// dofs). Default: every set named in `dirichlet` and `symmetry`.
     pub reactions: Option<Vec<String>>,
+    /// Node or face sets whose mean displacement goes into the history as `track_<set>_x`,
+    /// `_y`, `_z` (a beam's tip, say). Default: none.
+    #[serde(default)]
+    pub track: Vec<String>,
 }
 
 impl Default for OutputSpec {
@@ -375,6 +389,7 @@ impl Default for OutputSpec {
         OutputSpec {
             vtu_every: 1,
             reactions: None,
+            track: Vec::new(),
         }
     }
 }

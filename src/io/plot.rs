@@ -1,19 +1,28 @@
-//! Log-log plots of an error against the mesh size, as PNG and SVG (plotters).
+//! Plots as PNG and SVG (plotters): error against the mesh size on log-log axes ([`loglog`]), and
+//! curves on linear axes ([`lines`], e.g. force against displacement).
 //!
 //! Text is drawn by plotters' pure-Rust `ab_glyph` renderer with a TrueType font read from disk
 //! at run time (DejaVu Sans from Debian's `fonts-dejavu-core`, which `ci/setup` installs): no
 //! fontconfig, no freetype, no network. When no font file is found the plot is still written,
-//! without any text (no title, labels, tick values or legend), and [`loglog`] returns a warning
-//! saying so.
+//! without any text (no title, labels, tick values or legend), and [`loglog`] and [`lines`]
+//! return a warning saying so.
 //!
-//! Axes are logarithmic with ticks of our own ([`LogAxis`]): plotters' log scale only labels
-//! powers of ten, which leaves a convergence study within one decade of h without a single tick.
-//! Ticks are taken from the sparsest of the mantissa sets {1}, {1, 2, 5}, {1, ..., 9},
-//! {1, 1.5, ..., 9.5} (times powers of ten) that gives at least three labels in the range (four
-//! within a decade); the light grid lines sit at every {1, ..., 9} x 10^k.
+//! Log axes have ticks of our own ([`LogAxis`]): plotters' log scale only labels powers of ten,
+//! which leaves a convergence study within one decade of h without a single tick. Ticks are taken
+//! from the sparsest of the mantissa sets {1}, {1, 2, 5}, {1, ..., 9}, {1, 1.5, ..., 9.5} (times
+//! powers of ten) that gives at least three labels in the range (four within a decade); the light
+//! grid lines sit at every {1, ..., 9} x 10^k.
 //!
-//! The legend gives every series' least-squares slope of log(error) against log(h)
-//! ([`fitted_slope`]), the observed order of convergence.
+//! Linear axes (`LinearAxis`) span the data with a margin of 4 % of its range on each side (any
+//! sign), with labelled ticks at the multiples of the smallest step 1, 2 or 5 x 10^k that gives
+//! at most 8 (`LINEAR_LABELS`) of them, and light grid lines at a fifth (a quarter for a step
+//! 2 x 10^k) of that step.
+//!
+//! Every series is a line; its points are marked (circle, triangle, square, ... by series), every
+//! point for a series of at most 30 (`MARKERS`) points, else every k-th so that about 30 are.
+//! The legend sits in the corner of the plot that hides the least of the curves. In [`loglog`]
+//! it gives every series' least-squares slope of log(error) against log(h) ([`fitted_slope`]),
+//! the observed order of convergence; in [`lines`], the series' names.
 
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -30,9 +39,10 @@ use crate::{Error, Result};
 /// One curve of a plot.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Series {
-    /// Legend entry (the fitted slope is appended).
+    /// Legend entry (in [`loglog`], the fitted slope is appended).
     pub name: String,
-    /// `(h, error)` points; both must be positive and finite to appear on log axes.
+    /// `(x, y)` points, in drawing order: `(h, error)` in [`loglog`], where both must be positive
+    /// and finite to appear; in [`lines`], both must be finite.
     pub points: Vec<(f64, f64)>,
 }
 
@@ -48,6 +58,13 @@ const FAMILY: &str = "sans-serif";
 
 /// At most this many labelled ticks per axis.
 const LABELS: usize = 10;
+
+/// At most this many labelled ticks on a linear axis (its labels are longer: `-0.125`).
+const LINEAR_LABELS: usize = 8;
+
+/// A series of at most this many points has a marker on every point; a longer one on every k-th
+/// point, about this many in all.
+const MARKERS: usize = 30;
 
 /// Image size in pixels.
 const SIZE: (u32, u32) = (800, 600);
@@ -88,18 +105,53 @@ pub fn loglog(
     y_label: &str,
     series: &[Series],
 ) -> Result<Vec<String>> {
-    let mut warnings = Vec::new();
-    let text = font().is_some();
-    if !text {
-        warnings.push(format!(
-            "no font file found (tried {}; Debian package fonts-dejavu-core): {} has no text",
-            FONT_FILES.join(", "),
-            with_suffix(stem, "png").display()
-        ));
-    }
-    let plot = Plot::new(title, x_label, y_label, series, text, &mut warnings);
+    let mut warnings = font_warnings(stem);
+    let plot = Plot::new(
+        title,
+        x_label,
+        y_label,
+        series,
+        font().is_some(),
+        &mut warnings,
+    );
     plot.write(stem)?;
     Ok(warnings)
+}
+
+/// Writes `<stem>.png` and `<stem>.svg`: linear axes around the data (values of any sign), one
+/// line per series (with markers on at most about 30 of its points), a legend with the
+/// series' names, the title and the axis labels. Returns warnings (no font found: the plot has no
+/// text; non-finite points, which are not shown).
+pub fn lines(
+    stem: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+) -> Result<Vec<String>> {
+    let mut warnings = font_warnings(stem);
+    let plot = Plot::lines(
+        title,
+        x_label,
+        y_label,
+        series,
+        font().is_some(),
+        &mut warnings,
+    );
+    plot.write(stem)?;
+    Ok(warnings)
+}
+
+/// The warning for a plot at `stem` when no font file is found (none when one is).
+fn font_warnings(stem: &Path) -> Vec<String> {
+    if font().is_some() {
+        return Vec::new();
+    }
+    vec![format!(
+        "no font file found (tried {}; Debian package fonts-dejavu-core): {} has no text",
+        FONT_FILES.join(", "),
+        with_suffix(stem, "png").display()
+    )]
 }
 
 /// Least-squares slope of log(y) against log(x): the observed order when y is an error and x a
@@ -126,11 +178,6 @@ pub fn fitted_slope(points: &[(f64, f64)]) -> f64 {
     }
 }
 
-/// True if the point can be placed on log-log axes.
-fn loglog_ok(p: &(f64, f64)) -> bool {
-    loggable(p.0) && loggable(p.1)
-}
-
 /// True if `v` can be placed on a log axis.
 fn loggable(v: f64) -> bool {
     v.is_finite() && v > 0.0
@@ -144,19 +191,32 @@ fn with_suffix(stem: &Path, ext: &str) -> PathBuf {
     stem.with_file_name(name)
 }
 
-/// A plot ready to draw on any backend.
-struct Plot<'a> {
+/// What the plots need of an axis kind ([`LogAxis`], [`LinearAxis`]) beyond plotters' mapping.
+trait Axis: Ranged<ValueType = f64, FormatOption = DefaultFormatting> + Clone + 'static {
+    /// What a coordinate must be to be shown, for warnings ("finite").
+    const SHOWN: &'static str;
+
+    /// True if the coordinate `v` can be placed on this kind of axis.
+    fn shows(v: f64) -> bool;
+
+    /// The label of the tick at `v`.
+    fn label(&self, v: f64) -> String;
+}
+
+/// A plot ready to draw on any backend, on axes of kind `A`.
+struct Plot<'a, A: Axis> {
     title: &'a str,
     x_label: &'a str,
     y_label: &'a str,
     /// Legend entries and the points that can be shown.
     curves: Vec<(String, Vec<(f64, f64)>)>,
-    x: LogAxis,
-    y: LogAxis,
+    x: A,
+    y: A,
     text: bool,
 }
 
-impl<'a> Plot<'a> {
+impl<'a> Plot<'a, LogAxis> {
+    /// A log-log plot: the legend gives each series' fitted slope.
     fn new(
         title: &'a str,
         x_label: &'a str,
@@ -164,26 +224,19 @@ impl<'a> Plot<'a> {
         series: &[Series],
         text: bool,
         warnings: &mut Vec<String>,
-    ) -> Plot<'a> {
-        let mut curves = Vec::new();
-        for s in series {
-            let shown: Vec<(f64, f64)> = s.points.iter().copied().filter(loglog_ok).collect();
-            if shown.len() < s.points.len() {
-                warnings.push(format!(
-                    "plot '{title}': {} point(s) of '{}' are not positive and finite and are \
-                     not shown",
-                    s.points.len() - shown.len(),
-                    s.name
-                ));
-            }
-            let slope = fitted_slope(&shown);
-            let entry = match shown.len() {
-                0 => format!("{}: no points", s.name),
-                _ if slope.is_finite() => format!("{}: slope {slope:.2}", s.name),
-                _ => s.name.clone(),
-            };
-            curves.push((entry, shown));
-        }
+    ) -> Plot<'a, LogAxis> {
+        let curves: Vec<(String, Vec<(f64, f64)>)> = shown::<LogAxis>(title, series, warnings)
+            .into_iter()
+            .map(|(name, shown)| {
+                let slope = fitted_slope(&shown);
+                let entry = match shown.len() {
+                    0 => format!("{name}: no points"),
+                    _ if slope.is_finite() => format!("{name}: slope {slope:.2}"),
+                    _ => name.to_string(),
+                };
+                (entry, shown)
+            })
+            .collect();
         let all: Vec<(f64, f64)> = curves.iter().flat_map(|c| c.1.iter().copied()).collect();
         let x = LogAxis::around(all.iter().map(|p| p.0), 0.08, (0.1, 1.0));
         let y = LogAxis::around(all.iter().map(|p| p.1), 0.12, (0.01, 1.0));
@@ -197,7 +250,73 @@ impl<'a> Plot<'a> {
             text,
         }
     }
+}
 
+impl<'a> Plot<'a, LinearAxis> {
+    /// A plot on linear axes: the legend gives the series' names.
+    fn lines(
+        title: &'a str,
+        x_label: &'a str,
+        y_label: &'a str,
+        series: &[Series],
+        text: bool,
+        warnings: &mut Vec<String>,
+    ) -> Plot<'a, LinearAxis> {
+        let curves: Vec<(String, Vec<(f64, f64)>)> = shown::<LinearAxis>(title, series, warnings)
+            .into_iter()
+            .map(|(name, shown)| {
+                let entry = match shown.len() {
+                    0 => format!("{name}: no points"),
+                    _ => name.to_string(),
+                };
+                (entry, shown)
+            })
+            .collect();
+        let all: Vec<(f64, f64)> = curves.iter().flat_map(|c| c.1.iter().copied()).collect();
+        let x = LinearAxis::around(all.iter().map(|p| p.0), 0.04, (0.0, 1.0));
+        let y = LinearAxis::around(all.iter().map(|p| p.1), 0.04, (0.0, 1.0));
+        Plot {
+            title,
+            x_label,
+            y_label,
+            curves,
+            x,
+            y,
+            text,
+        }
+    }
+}
+
+/// Every series' name and the points that axes of kind `A` can show; a warning per series that
+/// loses points.
+fn shown<'s, A: Axis>(
+    title: &str,
+    series: &'s [Series],
+    warnings: &mut Vec<String>,
+) -> Vec<(&'s str, Vec<(f64, f64)>)> {
+    series
+        .iter()
+        .map(|s| {
+            let shown: Vec<(f64, f64)> = s
+                .points
+                .iter()
+                .copied()
+                .filter(|&(x, y)| A::shows(x) && A::shows(y))
+                .collect();
+            if shown.len() < s.points.len() {
+                warnings.push(format!(
+                    "plot '{title}': {} point(s) of '{}' are not {} and are not shown",
+                    s.points.len() - shown.len(),
+                    s.name,
+                    A::SHOWN
+                ));
+            }
+            (s.name.as_str(), shown)
+        })
+        .collect()
+}
+
+impl<A: Axis> Plot<'_, A> {
     /// Writes `<stem>.png` and `<stem>.svg`, each atomically.
     fn write(&self, stem: &Path) -> Result<()> {
         let png = with_suffix(stem, "png");
@@ -258,8 +377,8 @@ impl<'a> Plot<'a> {
             .build_cartesian_2d(self.x.clone(), self.y.clone())
             .map_err(e)?;
 
-        let x_fmt = |v: &f64| tick_label(*v);
-        let y_fmt = |v: &f64| tick_label(*v);
+        let x_fmt = |v: &f64| self.x.label(*v);
+        let y_fmt = |v: &f64| self.y.label(*v);
         let mut mesh = chart.configure_mesh();
         mesh.x_labels(LABELS)
             .y_labels(LABELS)
@@ -300,7 +419,7 @@ impl<'a> Plot<'a> {
                     color.stroke_width(2),
                 )))
                 .map_err(e)?;
-            for p in points {
+            for p in points.iter().step_by(marker_every(points.len())) {
                 marker(root, i, chart.backend_coord(p), color).map_err(e)?;
             }
         }
@@ -316,7 +435,7 @@ impl<'a> Plot<'a> {
         root.present().map_err(e)
     }
 
-    /// The legend: per series a line with its marker, then its name and slope, in a box in the
+    /// The legend: per series a line with its marker, then its entry (name, slope), in a box in the
     /// corner of the plotting area `plot` (pixels) that hides the least of the curves (`pixels`).
     fn legend<DB: DrawingBackend>(
         &self,
@@ -360,6 +479,11 @@ impl<'a> Plot<'a> {
         }
         Ok(())
     }
+}
+
+/// Markers go on every this many points of a series of `n` points (see [`MARKERS`]).
+fn marker_every(n: usize) -> usize {
+    n.div_ceil(MARKERS).max(1)
 }
 
 /// The upper left pixel of a `size` box in one corner of `plot` (lower right, upper left, lower
@@ -582,6 +706,202 @@ impl Ranged for LogAxis {
     }
 }
 
+impl Axis for LogAxis {
+    const SHOWN: &'static str = "positive and finite";
+
+    fn shows(v: f64) -> bool {
+        loggable(v)
+    }
+
+    fn label(&self, v: f64) -> String {
+        tick_label(v)
+    }
+}
+
+/// A linear axis over `[lo, hi]` with ticks at the multiples of a round step (see the module
+/// docs).
+#[derive(Clone, Debug)]
+struct LinearAxis {
+    lo: f64,
+    hi: f64,
+}
+
+/// A tick step `m 10^e`, `m` in {1, 2, 5}.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Step {
+    m: i64,
+    e: i32,
+}
+
+impl Step {
+    /// `k` steps: `k m 10^e`, computed as `k m / 10^-e` for a negative `e` (exact for the
+    /// decimal ticks where a product with 10^e is not).
+    fn times(self, k: i64) -> f64 {
+        let km = (k * self.m) as f64;
+        if self.e < 0 {
+            km / 10f64.powi(-self.e)
+        } else {
+            km * 10f64.powi(self.e)
+        }
+    }
+
+    /// The next larger step: 1 -> 2 -> 5 -> 10.
+    fn next(self) -> Step {
+        match self.m {
+            1 => Step { m: 2, e: self.e },
+            2 => Step { m: 5, e: self.e },
+            _ => Step {
+                m: 1,
+                e: self.e + 1,
+            },
+        }
+    }
+
+    /// The light-line step: a fifth of a step 1 or 5 x 10^e, a quarter of a step 2 x 10^e.
+    fn minor(self) -> Step {
+        match self.m {
+            1 => Step {
+                m: 2,
+                e: self.e - 1,
+            },
+            2 => Step {
+                m: 5,
+                e: self.e - 1,
+            },
+            _ => Step { m: 1, e: self.e },
+        }
+    }
+}
+
+impl LinearAxis {
+    /// The range of the finite `values`, widened by `pad` of its length on each side (a single
+    /// value `v`: `v -/+ 10 %` of `|v|`, or `-/+ 1` for zero); `empty` without values.
+    fn around(values: impl Iterator<Item = f64>, pad: f64, empty: (f64, f64)) -> LinearAxis {
+        let (lo, hi) = values
+            .filter(|v| v.is_finite())
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                (lo.min(v), hi.max(v))
+            });
+        if !(lo.is_finite() && hi.is_finite()) {
+            return LinearAxis {
+                lo: empty.0,
+                hi: empty.1,
+            };
+        }
+        if hi == lo {
+            let d = if lo == 0.0 { 1.0 } else { 0.1 * lo.abs() };
+            return LinearAxis {
+                lo: lo - d,
+                hi: hi + d,
+            };
+        }
+        let m = pad * (hi - lo);
+        LinearAxis {
+            lo: lo - m,
+            hi: hi + m,
+        }
+    }
+
+    /// The smallest round step with at most `max` (at least 2) ticks in range.
+    fn tick_step(&self, max: usize) -> Step {
+        let max = max.max(2);
+        let len = self.hi - self.lo;
+        if !(len > 0.0 && len.is_finite()) {
+            return Step { m: 1, e: 0 };
+        }
+        // A step of a tenth of len / max has too many ticks: start there and grow.
+        let mut step = Step {
+            m: 1,
+            e: (len / max as f64).log10().floor() as i32 - 1,
+        };
+        while self.count(step) > max {
+            step = step.next();
+        }
+        step
+    }
+
+    /// How many multiples of `step` are in range.
+    fn count(&self, step: Step) -> usize {
+        let (k0, k1) = self.bounds(step);
+        usize::try_from(k1 - k0 + 1).unwrap_or(0)
+    }
+
+    /// The first and last multiple of `step` in range, as multipliers.
+    fn bounds(&self, step: Step) -> (i64, i64) {
+        let s = step.times(1);
+        let slack = 1e-9;
+        (
+            (self.lo / s - slack).ceil() as i64,
+            (self.hi / s + slack).floor() as i64,
+        )
+    }
+
+    /// The multiples of `step` in range.
+    fn ticks(&self, step: Step) -> Vec<f64> {
+        let (k0, k1) = self.bounds(step);
+        (k0..=k1).map(|k| step.times(k)).collect()
+    }
+}
+
+impl Ranged for LinearAxis {
+    type FormatOption = DefaultFormatting;
+    type ValueType = f64;
+
+    fn map(&self, value: &f64, limit: (i32, i32)) -> i32 {
+        let s = (value - self.lo) / (self.hi - self.lo);
+        limit.0 + (s * f64::from(limit.1 - limit.0)).round() as i32
+    }
+
+    fn key_points<H: KeyPointHint>(&self, hint: H) -> Vec<f64> {
+        let max = hint.max_num_points();
+        let step = self.tick_step(max.min(LINEAR_LABELS));
+        match hint.weight() {
+            KeyPointWeight::Bold => self.ticks(step),
+            KeyPointWeight::Any => {
+                let minor = self.ticks(step.minor());
+                if minor.len() <= max {
+                    minor
+                } else {
+                    self.ticks(step)
+                }
+            }
+        }
+    }
+
+    fn range(&self) -> Range<f64> {
+        self.lo..self.hi
+    }
+}
+
+impl Axis for LinearAxis {
+    const SHOWN: &'static str = "finite";
+
+    fn shows(v: f64) -> bool {
+        v.is_finite()
+    }
+
+    fn label(&self, v: f64) -> String {
+        linear_label(v, self.tick_step(LINEAR_LABELS))
+    }
+}
+
+/// A tick value of a linear axis with labels every `step`: as many decimals as the step has
+/// (`-0.15`, `0.10`, `40`), or in scientific notation with the step's digits when the step is
+/// below 10^-4 or above 10^4 or the value is 10^6 or more (`1.25e-5`, `2.4e6`).
+fn linear_label(v: f64, step: Step) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{}", if v == 0.0 { 0.0 } else { v });
+    }
+    if (-4..=4).contains(&step.e) && v.abs() < 1e6 {
+        let decimals = (-step.e).max(0) as usize;
+        return format!("{v:.decimals$}");
+    }
+    let e = v.abs().log10().floor() as i32;
+    let digits = (e - step.e).max(0) as usize;
+    let m = v / 10f64.powi(e);
+    format!("{}e{e}", trim_zeros(format!("{m:.digits$}")))
+}
+
 /// A tick value in at most 3 significant digits: `0.25`, `40`, `2e-5`, `1.5e6`.
 fn tick_label(v: f64) -> String {
     if !loggable(v) {
@@ -741,6 +1061,192 @@ mod tests {
         assert!(w.iter().any(|w| w.contains("2 point(s) of 'x'")), "{w:?}");
         let empty = loglog(&dir.join("d"), "T", "h", "e", &[]).unwrap();
         assert!(empty.iter().all(|w| w.contains("font")));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn linear_ticks_are_round() {
+        // [0, 0.5] with a margin: steps of 0.1 (0.05 would give 11 labels).
+        let a = LinearAxis::around([0.0, 0.5].into_iter(), 0.04, (0.0, 1.0));
+        assert!(
+            (a.lo + 0.02).abs() < 1e-12 && (a.hi - 0.52).abs() < 1e-12,
+            "{a:?}"
+        );
+        let step = a.tick_step(LINEAR_LABELS);
+        assert_eq!(step, Step { m: 1, e: -1 });
+        assert_eq!(a.ticks(step), vec![0.0, 0.1, 0.2, 0.3, 0.4, 0.5]);
+        assert_eq!(a.key_points(LINEAR_LABELS), a.ticks(step));
+        // Light lines every fifth of a step.
+        assert_eq!(a.ticks(step.minor()).len(), 28);
+        // Other spans: steps 2 and 5 x 10^k.
+        let a = LinearAxis { lo: 0.0, hi: 13.0 };
+        assert_eq!(
+            a.ticks(a.tick_step(8)),
+            vec![0.0, 2.0, 4.0, 6.0, 8.0, 10.0, 12.0]
+        );
+        let a = LinearAxis {
+            lo: 0.003,
+            hi: 0.031,
+        };
+        assert_eq!(
+            a.ticks(a.tick_step(8)),
+            vec![0.005, 0.01, 0.015, 0.02, 0.025, 0.03]
+        );
+        // Pixels: the ends of the range map to the ends of the axis.
+        let a = LinearAxis { lo: -2.0, hi: 2.0 };
+        assert_eq!((a.map(&-2.0, (0, 400)), a.map(&0.0, (0, 400))), (0, 200));
+        assert_eq!(a.map(&2.0, (0, 400)), 400);
+    }
+
+    #[test]
+    fn linear_axes_take_negative_and_degenerate_ranges() {
+        // A compressive reaction: all negative.
+        let a = LinearAxis::around([-48.0, -5.2, -20.0].into_iter(), 0.04, (0.0, 1.0));
+        assert!(a.lo < -48.0 && a.hi > -5.2 && a.hi < 0.0, "{a:?}");
+        let step = a.tick_step(LINEAR_LABELS);
+        assert_eq!(a.ticks(step), vec![-40.0, -30.0, -20.0, -10.0]);
+        let labels: Vec<String> = a.ticks(step).iter().map(|&v| a.label(v)).collect();
+        assert_eq!(labels, ["-40", "-30", "-20", "-10"]);
+        // Across zero: zero is a tick, labelled "0".
+        let a = LinearAxis::around([-0.2, 0.05].into_iter(), 0.04, (0.0, 1.0));
+        let ticks = a.ticks(a.tick_step(LINEAR_LABELS));
+        assert_eq!(ticks, vec![-0.2, -0.15, -0.1, -0.05, 0.0, 0.05]);
+        let labels: Vec<String> = ticks.iter().map(|&v| a.label(v)).collect();
+        assert_eq!(labels, ["-0.20", "-0.15", "-0.10", "-0.05", "0", "0.05"]);
+        // One value, zero, none: a range around it, or the default.
+        let a = LinearAxis::around([3.0, 3.0].into_iter(), 0.04, (0.0, 1.0));
+        assert_eq!((a.lo, a.hi), (2.7, 3.3));
+        let a = LinearAxis::around([0.0].into_iter(), 0.04, (0.0, 1.0));
+        assert_eq!((a.lo, a.hi), (-1.0, 1.0));
+        let a = LinearAxis::around([f64::NAN].into_iter(), 0.04, (0.0, 1.0));
+        assert_eq!((a.lo, a.hi), (0.0, 1.0));
+    }
+
+    #[test]
+    fn linear_labels() {
+        let step = |m, e| Step { m, e };
+        assert_eq!(linear_label(0.15, step(5, -2)), "0.15");
+        assert_eq!(linear_label(0.1, step(5, -2)), "0.10");
+        assert_eq!(linear_label(-40.0, step(1, 1)), "-40");
+        assert_eq!(linear_label(0.0, step(1, -1)), "0");
+        assert_eq!(linear_label(-0.0, step(1, -1)), "0");
+        assert_eq!(linear_label(2500.0, step(5, 2)), "2500");
+        assert_eq!(linear_label(2.5e-5, step(5, -6)), "2.5e-5");
+        assert_eq!(linear_label(-1.2e6, step(2, 5)), "-1.2e6");
+        assert_eq!(linear_label(3e7, step(1, 7)), "3e7");
+    }
+
+    #[test]
+    fn markers_on_at_most_about_thirty_points() {
+        assert_eq!(marker_every(0), 1);
+        assert_eq!(marker_every(5), 1);
+        assert_eq!(marker_every(30), 1);
+        assert_eq!(marker_every(31), 2);
+        assert_eq!(marker_every(300), 10);
+        // 300 points: 30 markers (circles, the first series' shape), plus the legend's.
+        let dir = scratch("markers");
+        let s = vec![Series {
+            name: "many".into(),
+            points: (0..300)
+                .map(|i| (f64::from(i), f64::from(i).sin()))
+                .collect(),
+        }];
+        lines(&dir.join("m"), "T", "x", "y", &s).unwrap();
+        let svg = std::fs::read_to_string(dir.join("m.svg")).unwrap();
+        let circles = svg.matches("<circle").count();
+        let legend = usize::from(font().is_some());
+        assert_eq!(circles, 30 + legend, "{circles} circles");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn line_plot_files_are_written() {
+        let dir = scratch("lines");
+        let stem = dir.join("curves");
+        let series = vec![
+            Series {
+                name: "soft".into(),
+                points: (0..=4)
+                    .map(|i| (-0.05 * f64::from(i), -12.0 * f64::from(i)))
+                    .collect(),
+            },
+            Series {
+                name: "stiff".into(),
+                points: (0..=4)
+                    .map(|i| (-0.05 * f64::from(i), -24.0 * f64::from(i)))
+                    .collect(),
+            },
+            Series {
+                name: "failed".into(),
+                points: vec![],
+            },
+        ];
+        let warnings = lines(&stem, "Reaction", "u_z", "reaction", &series).unwrap();
+        let png = std::fs::read(dir.join("curves.png")).unwrap();
+        assert!(png.starts_with(b"\x89PNG\r\n\x1a\n"));
+        let svg = std::fs::read_to_string(dir.join("curves.svg")).unwrap();
+        assert!(svg.contains("<svg"));
+        if font().is_some() {
+            assert!(warnings.is_empty(), "{warnings:?}");
+            for text in [
+                "soft",
+                "stiff",
+                "failed: no points",
+                "Reaction",
+                "-0.20",
+                "-80",
+            ] {
+                assert!(svg.contains(&format!("\n{text}\n")), "no {text} in the SVG");
+            }
+            assert!(!svg.contains("slope"));
+        } else {
+            assert!(warnings[0].contains("no font"), "{warnings:?}");
+        }
+        let mut names: Vec<String> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert_eq!(names, ["curves.png", "curves.svg"]);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn line_plot_drops_non_finite_points_with_a_warning() {
+        let dir = scratch("lines-bad");
+        let s = vec![
+            Series {
+                name: "x".into(),
+                points: vec![
+                    (0.0, 1.0),
+                    (0.5, f64::NAN),
+                    (f64::INFINITY, 2.0),
+                    (-1.0, -3.0),
+                ],
+            },
+            Series {
+                name: "negative".into(),
+                points: vec![(-1.0, -1.0), (-2.0, -5.0)],
+            },
+        ];
+        let w = lines(&dir.join("c"), "T", "x", "y", &s).unwrap();
+        let dropped: Vec<&String> = w.iter().filter(|w| w.contains("point(s)")).collect();
+        assert_eq!(dropped.len(), 1, "{w:?}");
+        assert!(
+            dropped[0].contains("2 point(s) of 'x' are not finite"),
+            "{w:?}"
+        );
+        let mut warnings = Vec::new();
+        let plot = Plot::lines("T", "x", "y", &s, false, &mut warnings);
+        assert_eq!(plot.curves[0].1, vec![(0.0, 1.0), (-1.0, -3.0)]);
+        assert_eq!(plot.curves[1].1, s[1].points);
+        assert!(plot.x.lo < -2.0 && plot.x.hi > 0.0 && plot.y.lo < -5.0 && plot.y.hi > 1.0);
+        plot.write(&dir.join("d")).unwrap();
+        let svg = std::fs::read_to_string(dir.join("d.svg")).unwrap();
+        assert!(!svg.contains("<text"));
+        let empty = lines(&dir.join("e"), "T", "x", "y", &[]).unwrap();
+        assert!(empty.iter().all(|w| w.contains("font")));
+        assert!(dir.join("e.png").is_file() && dir.join("e.svg").is_file());
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -225,6 +225,25 @@ impl Snes {
         ))
     }
 
+    /// The largest number of Newton iterations of the next solves (the other tolerances are
+    /// kept); returns the previous value.
+    pub fn set_max_iterations(&mut self, max_it: usize) -> Result<usize> {
+        let (mut atol, mut rtol, mut stol) = (0.0, 0.0, 0.0);
+        let (mut old, mut max_f): (PetscInt, PetscInt) = (0, 0);
+        chk!(SNESGetTolerances(
+            self.raw, &mut atol, &mut rtol, &mut stol, &mut old, &mut max_f
+        ))?;
+        chk!(SNESSetTolerances(
+            self.raw,
+            atol,
+            rtol,
+            stol,
+            super::to_petsc_int(max_it)?,
+            max_f
+        ))?;
+        Ok(old.max(0) as usize)
+    }
+
     /// Makes the next solves take at least one Newton iteration even when the first residual
     /// is already below the tolerances (after an Uzawa update, say).
     pub fn force_iteration(&mut self, on: bool) -> Result<()> {

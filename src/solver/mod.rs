@@ -42,6 +42,10 @@ use model::DomainIssue;
 use model::Model;
 use results::Results;
 
+/// At most this many Newton iterations for the stick predictor of a frictional step (it is
+/// only a starting point: when it does not converge, the step starts from the load predictor).
+const STICK_PREDICTOR_ITERATIONS: usize = 6;
+
 /// How a run is carried out.
 #[derive(Clone, Debug)]
 pub struct RunOptions {
@@ -166,6 +170,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         let mut contact_history: Vec<Vec<[f64; crate::contact::frictional::FORCE_SUMS]>> =
             Vec::new();
         let mut x_prev = x.duplicate()?;
+        let mut x_guess = x.duplicate()?;
         while t < 1.0 - 1e-12 {
             let t_new = if t + dt > 1.0 - 1e-9 { 1.0 } else { t + dt };
             x.copy_to(&mut x_prev)?;
@@ -203,29 +208,51 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
             let solve_guard = phases.push("solve")?;
             let multipliers = model.tying.multipliers();
             let (mut augmentations, mut newton_total, mut linear_total) = (0usize, 0usize, 0usize);
-            let outcome = loop {
-                let outcome = {
-                    let model = &model;
-                    let mut residual = |xv: &Vector, f: &mut Vector| -> Result<(), CallbackError> {
-                        let _stage = assembly_stage.map(|st| st.push()).transpose()?;
-                        let mut s = state.borrow_mut();
-                        let t0 = Instant::now();
-                        s.load(scene, &dofs, xv)?;
-                        let inv = model.residual(scene, &dofs, &s.u, s.t, f)?;
-                        s.assembly_seconds += t0.elapsed().as_secs_f64();
-                        collective_domain_check(&world, inv)
-                    };
-                    let mut jacobian = |xv: &Vector, j: &mut Matrix| -> Result<(), CallbackError> {
-                        let _stage = assembly_stage.map(|st| st.push()).transpose()?;
-                        let mut s = state.borrow_mut();
-                        let t0 = Instant::now();
-                        s.load(scene, &dofs, xv)?;
-                        let inv = model.jacobian(scene, &dofs, &s.u, s.t, j)?;
-                        s.assembly_seconds += t0.elapsed().as_secs_f64();
-                        collective_domain_check(&world, inv)
-                    };
-                    snes.solve(&mut x, &mut jac, &mut residual, &mut jacobian)?
+            // One SNES solve of the current model from `x` (the closures borrow the model, so
+            // they are made afresh for every solve).
+            let solve_once = |snes: &mut Snes,
+                              x: &mut Vector,
+                              jac: &mut Matrix,
+                              model: &Model|
+             -> Result<crate::petsc::snes::SnesOutcome> {
+                let mut residual = |xv: &Vector, f: &mut Vector| -> Result<(), CallbackError> {
+                    let _stage = assembly_stage.map(|st| st.push()).transpose()?;
+                    let mut s = state.borrow_mut();
+                    let t0 = Instant::now();
+                    s.load(scene, &dofs, xv)?;
+                    let inv = model.residual(scene, &dofs, &s.u, s.t, f)?;
+                    s.assembly_seconds += t0.elapsed().as_secs_f64();
+                    collective_domain_check(&world, inv)
                 };
+                let mut jacobian = |xv: &Vector, j: &mut Matrix| -> Result<(), CallbackError> {
+                    let _stage = assembly_stage.map(|st| st.push()).transpose()?;
+                    let mut s = state.borrow_mut();
+                    let t0 = Instant::now();
+                    s.load(scene, &dofs, xv)?;
+                    let inv = model.jacobian(scene, &dofs, &s.u, s.t, j)?;
+                    s.assembly_seconds += t0.elapsed().as_secs_f64();
+                    collective_domain_check(&world, inv)
+                };
+                snes.solve(x, jac, &mut residual, &mut jacobian)
+            };
+            if scene.stick_predictor && model.contact.has_friction() {
+                // The stick predictor (see `contact::frictional`): solve with every pressed
+                // node sticking, then release the Coulomb law from there.
+                x.copy_to(&mut x_guess)?;
+                model.contact.set_stick_all(true);
+                let max_it = snes.set_max_iterations(STICK_PREDICTOR_ITERATIONS)?;
+                let pre = solve_once(&mut snes, &mut x, &mut jac, &model);
+                model.contact.set_stick_all(false);
+                snes.set_max_iterations(max_it)?;
+                let pre = pre?;
+                newton_total += pre.iterations;
+                linear_total += pre.linear_iterations;
+                if !pre.converged {
+                    x_guess.copy_to(&mut x)?;
+                }
+            }
+            let outcome = loop {
+                let outcome = solve_once(&mut snes, &mut x, &mut jac, &model)?;
                 newton_total += outcome.iterations;
                 linear_total += outcome.linear_iterations;
                 if !outcome.converged || (model.tying.is_empty() && model.contact.is_empty()) {
@@ -312,6 +339,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
             let s = state.borrow();
             let reactions = results.reactions(scene, &model, &s.u, t, &world)?;
             let contact_forces = model.contact.force_sums(scene, &s.u, &world);
+            let tracked = results.tracked(scene, &dofs, &s.u, &world);
             contact_history.push(contact_forces.clone());
             let write_vtu = scene.vtu_every > 0 && (step % scene.vtu_every == 0 || t >= 1.0);
             if write_vtu {
@@ -332,6 +360,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                 residual: final_res,
                 reactions: &reactions,
                 u: &s_u(&state),
+                tracked: &tracked,
                 contact_forces: &contact_forces,
                 seconds: [
                     assembly,

@@ -43,6 +43,8 @@ pub struct StepRow<'a> {
     pub reactions: &'a [[f64; 3]],
     /// Displacements (dof-indexed; the constrained dofs at least).
     pub u: &'a [f64],
+    /// Mean displacement of each tracked set (`Results::tracked`).
+    pub tracked: &'a [[f64; 3]],
     pub contact_forces: &'a [[f64; crate::contact::frictional::FORCE_SUMS]],
     pub seconds: [f64; 3],
 }
@@ -95,6 +97,11 @@ impl Results {
                     cols.push(format!("u_{name}_{c}"));
                 }
             }
+            for (name, _) in &scene.tracked {
+                for c in ["x", "y", "z"] {
+                    cols.push(format!("track_{name}_{c}"));
+                }
+            }
             for iface in scene
                 .interfaces
                 .iter()
@@ -142,6 +149,32 @@ impl Results {
         let mut global = vec![0.0; local.len()];
         world.all_reduce_into(&local[..], &mut global[..], SystemOperation::sum());
         Ok(global.chunks(3).map(|c| [c[0], c[1], c[2]]).collect())
+    }
+
+    /// The mean displacement of each tracked set (collective: owners sum, all reduce).
+    pub fn tracked(
+        &self,
+        scene: &Scene,
+        dofs: &DofMap,
+        u: &[f64],
+        world: &mpi::topology::SimpleCommunicator,
+    ) -> Vec<[f64; 3]> {
+        let mut local = Vec::with_capacity(4 * scene.tracked.len());
+        for (_, nodes) in &scene.tracked {
+            let mut sum = [0.0f64; 4];
+            for &n in nodes.iter().filter(|&&n| dofs.node_owner[n] == self.rank) {
+                for c in 0..3 {
+                    sum[c] += u[3 * n + c];
+                }
+                sum[3] += 1.0;
+            }
+            local.extend(sum);
+        }
+        let mut all = vec![0.0f64; local.len()];
+        world.all_reduce_into(&local[..], &mut all[..], SystemOperation::sum());
+        all.chunks(4)
+            .map(|v| std::array::from_fn(|c| v[c] / v[3].max(1.0)))
+            .collect()
     }
 
     /// The mean constrained displacement of each reaction set, per axis (0 where the set
@@ -260,6 +293,7 @@ impl Results {
         ];
         row.extend(r.reactions.iter().flatten());
         row.extend(set_u.iter().flatten());
+        row.extend(r.tracked.iter().flatten());
         row.extend(r.contact_forces.iter().flatten());
         row.extend(r.seconds);
         h.push_row(row)
