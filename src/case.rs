@@ -60,6 +60,57 @@ pub struct Constraint {
     pub dof: usize,
     pub value: f64,
     pub curve: usize,
+    /// A rigid rotation applied after the displacement (index into `Scene::rotations`), with
+    /// the entry's whole displacement vector at full load: then
+    /// `u = R(t) (X - centre + shift curve(t)) + centre - X`, component `dof % 3`.
+    pub rotation: Option<(usize, [f64; 3])>,
+}
+
+/// A prescribed rigid rotation: by `angle * curve(t)` radians about `axis` (unit) through
+/// `centre`.
+#[derive(Clone, Debug)]
+pub struct Rotation {
+    pub axis: [f64; 3],
+    pub angle: f64,
+    pub centre: [f64; 3],
+    pub curve: usize,
+}
+
+impl Constraint {
+    /// The prescribed displacement of this dof at load `t` (`coords` are the reference
+    /// coordinates of every node).
+    pub fn value_at(
+        &self,
+        t: f64,
+        curves: &[LoadCurve],
+        rotations: &[Rotation],
+        x: [f64; 3],
+    ) -> f64 {
+        let s = curves[self.curve].eval(t);
+        match self.rotation {
+            None => self.value * s,
+            Some((r, shift)) => {
+                let rot = &rotations[r];
+                let theta = rot.angle * curves[rot.curve].eval(t);
+                let p: [f64; 3] = std::array::from_fn(|i| x[i] - rot.centre[i] + shift[i] * s);
+                let q = rotate(p, rot.axis, theta);
+                let c = self.dof % 3;
+                q[c] + rot.centre[c] - x[c]
+            }
+        }
+    }
+}
+
+/// `v` rotated by `theta` about the unit `axis` (Rodrigues).
+fn rotate(v: [f64; 3], k: [f64; 3], theta: f64) -> [f64; 3] {
+    let (sin, cos) = theta.sin_cos();
+    let kxv = [
+        k[1] * v[2] - k[2] * v[1],
+        k[2] * v[0] - k[0] * v[2],
+        k[0] * v[1] - k[1] * v[0],
+    ];
+    let kv = k[0] * v[0] + k[1] * v[1] + k[2] * v[2];
+    std::array::from_fn(|i| v[i] * cos + kxv[i] * sin + k[i] * kv * (1.0 - cos))
 }
 
 /// A follower pressure on faces.
@@ -159,6 +210,8 @@ pub struct Scene {
     /// `(node, axis)` of every symmetry-plane constraint (contact normals drop those
     /// components).
     pub symmetry: Vec<(usize, usize)>,
+    /// Prescribed rigid rotations (referenced by constraints).
+    pub rotations: Vec<Rotation>,
     /// Sets whose mean displacement the history tracks, with their nodes.
     pub tracked: Vec<(String, Vec<usize>)>,
     /// Sets whose reactions are reported, with their constrained dofs.
@@ -230,6 +283,7 @@ impl Scene {
         let mut reaction_sets = BTreeMap::new();
         let zero_curve = add_curve(&LoadCurveSpec::default(), String::new())?;
         let mut symmetry = Vec::new();
+        let mut rotations = Vec::new();
         for (i, s) in file.symmetry.iter().enumerate() {
             let c = axis(&s.normal).ok_or_else(|| {
                 err(format!(
@@ -249,6 +303,7 @@ impl Scene {
                         dof: d,
                         value: 0.0,
                         curve: zero_curve,
+                        rotation: None,
                     },
                 );
             }
@@ -288,6 +343,37 @@ impl Scene {
                 return Err(err(format!("{key}.value: {v} is not finite")));
             }
             let curve = add_curve(&d.curve, format!("{key}.curve"))?;
+            let rotation = match &d.rotation {
+                None => None,
+                Some(r) => {
+                    if d.gradient.is_some() {
+                        return Err(err(format!("{key}: give rotation or gradient, not both")));
+                    }
+                    let len = r.axis.iter().map(|a| a * a).sum::<f64>().sqrt();
+                    if !(len > 0.0 && len.is_finite()) {
+                        return Err(err(format!(
+                            "{key}.rotation.axis: must be a nonzero vector"
+                        )));
+                    }
+                    if !r.angle.is_finite() || r.centre.iter().any(|c| !c.is_finite()) {
+                        return Err(err(format!(
+                            "{key}.rotation: angle and centre must be finite"
+                        )));
+                    }
+                    let rcurve = add_curve(&r.curve, format!("{key}.rotation.curve"))?;
+                    rotations.push(Rotation {
+                        axis: r.axis.map(|a| a / len),
+                        angle: r.angle,
+                        centre: r.centre,
+                        curve: rcurve,
+                    });
+                    let mut shift = [0.0; 3];
+                    for (k, &c) in comps.iter().enumerate() {
+                        shift[c] = values[k];
+                    }
+                    Some((rotations.len() - 1, shift))
+                }
+            };
             let mut dofs = Vec::new();
             for &v in &nodes {
                 for (k, &c) in comps.iter().enumerate() {
@@ -301,6 +387,7 @@ impl Scene {
                             dof: 3 * v + c,
                             value,
                             curve,
+                            rotation,
                         },
                     );
                     dofs.push(3 * v + c);
@@ -421,6 +508,7 @@ impl Scene {
             body_forces,
             interfaces,
             symmetry,
+            rotations,
             tracked,
             reaction_sets,
             quadrature_degree: file.quadrature_degree,

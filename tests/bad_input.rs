@@ -448,6 +448,11 @@ value = [0.0, 0.0, -1.0]
             "contact_patch",
         ),
         check(
+            "rotation_with_zero_axis",
+            valid_plus("[[dirichlet]]\nset = \"b.zmin\"\ncomponents = [\"x\"]\nrotation = { axis = [0.0, 0.0, 0.0], angle = 1.0 }\n"),
+            "dirichlet[2].rotation.axis",
+        ),
+        check(
             "key_not_for_this_generator",
             valid_with("divisions = [1, 1, 1]", "divisions = [1, 1, 1]\nn_circ = 3"),
             "mesh[0].n_circ",

@@ -126,7 +126,7 @@ use crate::petsc::{Matrix, PetscInt, Sparsity, Vector};
 pub const MIN_COVERAGE: f64 = 1e-3;
 
 /// Number of figures of [`ContactInterfaces::force_sums`] per interface.
-pub const FORCE_SUMS: usize = 7;
+pub const FORCE_SUMS: usize = 9;
 
 /// Gaps within this fraction of `h_A` of closing count as touching: zero pressure, closed
 /// tangent ([`normal_pressure_touching`]), so that surfaces that start in contact without load
@@ -504,10 +504,13 @@ impl ContactInterfaces {
     }
 
     /// Total contact force per interface, summed over passes and ranks:
-    /// `[normal, tangential, fx, fy, fz, stick, slip]`, with `normal = sum_A a_A p_A`,
+    /// `[normal, tangential, fx, fy, fz, stick, slip, dissipation, max_slip]`, with
+    /// `normal = sum_A a_A p_A`,
     /// `tangential = |sum_A a_A t_T,A|`, `f = sum_A a_A t_A` (the force on the primary side of
     /// the first pass; the second pass's terms enter with the opposite sign, its sides being
-    /// swapped) and the numbers of sticking and slipping nodes.
+    /// swapped), the numbers of sticking and slipping nodes, and the frictional work of the
+    /// step `sum_A a_A t_T,A . dsh_A` (non-negative: friction dissipates), and the largest
+    /// step slip `|dsh_A|` of a pressed node.
     pub fn force_sums(
         &self,
         scene: &Scene,
@@ -515,8 +518,10 @@ impl ContactInterfaces {
         world: &SimpleCommunicator,
     ) -> Vec<[f64; FORCE_SUMS]> {
         let mut local = Vec::new();
+        let mut local_max = Vec::new();
         for i in 0..self.interfaces.len() {
-            let mut v = [0.0; 9];
+            let mut v = [0.0; 10];
+            let mut max_slip = 0.0f64;
             for p in 0..self.interfaces[i].passes.len() {
                 // Forces on the primary side of the first pass: the second pass's primary is
                 // the first pass's secondary.
@@ -533,14 +538,22 @@ impl ContactInterfaces {
                         2 => v[8] += 1.0,
                         _ => {}
                     }
+                    v[9] += nf.area * dot(nf.traction_t, nf.slip);
+                    if nf.pressure > 0.0 {
+                        max_slip = max_slip.max(norm(&nf.slip));
+                    }
                 }
             }
             local.extend(v);
+            local_max.push(max_slip);
         }
         let mut all = vec![0.0; local.len()];
         world.all_reduce_into(&local[..], &mut all[..], SystemOperation::sum());
-        all.chunks(9)
-            .map(|v| [v[0], norm(&v[1..4]), v[4], v[5], v[6], v[7], v[8]])
+        let mut all_max = vec![0.0; local_max.len()];
+        world.all_reduce_into(&local_max[..], &mut all_max[..], SystemOperation::max());
+        all.chunks(10)
+            .zip(all_max)
+            .map(|(v, m)| [v[0], norm(&v[1..4]), v[4], v[5], v[6], v[7], v[8], v[9], m])
             .collect()
     }
 

@@ -171,6 +171,27 @@ pub struct DirichletSpec {
     /// Load curve. Default: ramp.
     #[serde(default)]
     pub curve: LoadCurveSpec,
+    /// A rigid rotation applied after `value`: the prescribed displacement of a node at X is
+    /// `u = R(t) (X - centre + v curve(t)) + centre - X`, with v the entry's `value` (zero for
+    /// the components not listed) and `R(t)` the rotation by `angle * rotation.curve(t)` about
+    /// `axis` through `centre`; only the listed components are prescribed. Not with `gradient`.
+    pub rotation: Option<RotationSpec>,
+}
+
+/// A prescribed rigid rotation (see `DirichletSpec::rotation`).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RotationSpec {
+    /// Rotation axis (any nonzero length).
+    pub axis: [f64; 3],
+    /// Angle at full load, radians (right-hand rule about `axis`).
+    pub angle: f64,
+    /// A point on the axis. Default: the origin.
+    #[serde(default)]
+    pub centre: [f64; 3],
+    /// How the angle follows the load. Default: ramp.
+    #[serde(default)]
+    pub curve: LoadCurveSpec,
 }
 
 /// A symmetry plane through a set: zero displacement along `normal`.

@@ -72,7 +72,8 @@ impl EvalState {
             self.u[d] = v;
         }
         for c in &scene.constraints {
-            self.u[c.dof] = c.value * scene.curves[c.curve].eval(self.t);
+            let x = scene.mesh.coords[c.dof / 3];
+            self.u[c.dof] = c.value_at(self.t, &scene.curves, &scene.rotations, x);
         }
         Ok(())
     }

@@ -30,7 +30,7 @@ use crate::solid::element_stress;
 /// One converged step, as a history row: `step, load, newton_its, augmentations, cuts,
 /// linear_its, residual`, the reaction components of every reaction set, the contact force
 /// sums of every contact interface (`contact_<name>_normal`, `_tangential`, `_fx`, `_fy`,
-/// `_fz`, `_stick`, `_slip`: see `ContactInterfaces::force_sums`), and the seconds of assembly, solve and output.
+/// `_fz`, `_stick`, `_slip`, `_dissipation`, `_max_slip`: see `ContactInterfaces::force_sums`), and the seconds of assembly, solve and output.
 /// Newton iterations are summed over the step's Uzawa solves.
 pub struct StepRow<'a> {
     pub step: usize,
@@ -107,7 +107,17 @@ impl Results {
                 .iter()
                 .filter(|i| i.kind == crate::case::InterfaceKind::Contact)
             {
-                for c in ["normal", "tangential", "fx", "fy", "fz", "stick", "slip"] {
+                for c in [
+                    "normal",
+                    "tangential",
+                    "fx",
+                    "fy",
+                    "fz",
+                    "stick",
+                    "slip",
+                    "dissipation",
+                    "max_slip",
+                ] {
                     cols.push(format!("contact_{}_{c}", iface.name));
                 }
             }
