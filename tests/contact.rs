@@ -4,7 +4,7 @@
 //!   non-matching meshes under a uniform follower pressure p0. The exact solution is a
 //!   homogeneous finite deformation with Cauchy stress `sigma_zz = -p0` and every contact
 //!   pressure `p_A = p0`; checked for Hex8, Hex20, Hex27 and Tet10, either side secondary,
-//!   schemes 2 and 3, to 1e-10, with the contact forces summing to zero;
+//!   schemes 2 and 3 (and 1 on Hex27), to 1e-10, with the contact forces summing to zero;
 //! - the assembled Jacobian of a frictional sliding scene against PETSc's finite-difference
 //!   Jacobian (`-snes_test_jacobian`) at every Newton iterate;
 //! - the same results on 1 and 2 ranks.
@@ -78,7 +78,7 @@ scheme = {scheme}
 [steps]
 count = 2
 [newton]
-atol = 1e-11
+atol = 1e-10
 rtol = 1e-12
 [verification]
 kind = "contact_patch"
@@ -98,8 +98,14 @@ fn contact_patch_test_non_matching_blocks() {
         ("tet10", [2, 2], [3, 3]),
     ];
     for (element, lo, up) in cases {
+        // Scheme 1 (the face's own functions) is well posed on Quad9 faces only.
+        let schemes: &[u8] = if element == "hex27" {
+            &[1, 2, 3]
+        } else {
+            &[2, 3]
+        };
         for secondary in ["low", "up"] {
-            for scheme in [2, 3] {
+            for &scheme in schemes {
                 let name = format!("contact_patch_{element}_{secondary}_s{scheme}");
                 let case =
                     common::write_case(&name, &patch_case(element, lo, up, secondary, scheme));
