@@ -73,7 +73,7 @@
 //! With `[curves]`, the runs at the **last** refinement level are compared: each variant's
 //! `history.csv` (one row per converged load step) gives the points `(x, y)` of its curve
 //! (`(x, |y|)` with `abs`), in load order. For every variant other than the reference, the
-//! metric `curve_max_rel_diff_<variant>` is the largest, over the reference's points with
+//! metric `curve_max_rel_diff_<variant>` (or `<curves.metric>_<variant>`) is the largest, over the reference's points with
 //! `x > after`, of `|y_v(x) - y_ref(x)| / |y_ref(x)|`, where `y_v` is the variant's curve
 //! linearly interpolated at the reference's `x` (its points sorted by x; of several points at
 //! one x, the last in load order). Reference points outside the variant's x range, and those
@@ -174,6 +174,9 @@ pub struct CurvesSpec {
     /// Plot and compare |y| instead of y (a compressive reaction is negative). Default: false.
     #[serde(default)]
     pub abs: bool,
+    /// The name of the comparison metrics, `<metric>_<variant>` in the study summary (e.g.
+    /// `tip_rel_diff` for a beam's tip). Letters, digits and `_`. Default: `curve_max_rel_diff`.
+    pub metric: Option<String>,
 }
 
 /// One mesh refinement.
@@ -242,6 +245,8 @@ pub struct Curves {
     pub abs: bool,
     /// The curves plot's title.
     pub title: String,
+    /// The comparison metrics are `<metric>_<variant>`.
+    pub metric: String,
 }
 
 /// One run of a study, as recorded in `study.csv`.
@@ -348,6 +353,15 @@ impl Study {
                         .join(", ")
                 )));
             }
+            if let Some(m) = &c.metric {
+                let ok =
+                    !m.is_empty() && m.chars().all(|ch| ch.is_ascii_alphanumeric() || ch == '_');
+                if !ok {
+                    return Err(err(format!(
+                        "curves.metric = \"{m}\": letters, digits and _ only"
+                    )));
+                }
+            }
             if c.after.is_some_and(f64::is_nan) {
                 return Err(err("curves.after: not a number".into()));
             }
@@ -416,6 +430,7 @@ impl Study {
                 reference: c.reference,
                 after: c.after.unwrap_or(f64::NEG_INFINITY),
                 abs: c.abs,
+                metric: c.metric.unwrap_or_else(|| "curve_max_rel_diff".to_string()),
             }
         });
         study.title = file
@@ -592,7 +607,7 @@ impl Study {
                     if let Some(d) = d {
                         summary
                             .metrics
-                            .insert(format!("curve_max_rel_diff_{name}"), *d);
+                            .insert(format!("{}_{name}", curves.metric), *d);
                     }
                 }
                 summary.write(&out.join("summary.json"))?;

@@ -35,7 +35,7 @@ fn one_and_two_passes_bend_like_the_conforming_mesh() {
     assert!(out.join("curves.png").is_file() && out.join("curves.svg").is_file());
     let s = common::summary(&out);
     for variant in ["onepass", "twopass"] {
-        let key = format!("curve_max_rel_diff_{variant}");
+        let key = format!("tip_rel_diff_{variant}");
         let d = s["metrics"][&key]
             .as_f64()
             .unwrap_or_else(|| panic!("no metric {key}"));
