@@ -11,7 +11,7 @@
 //! a_A   = sum_B n1_AB                                   (traction integral of the overlap)
 //! g_A   = sum_B n1_AB x_B - sum_C n2_AC x_C             (weighted gap vector)
 //! gh_A  = nu_A . g_A / a_A                              (normalized gap, > 0 in penetration)
-//! p_A   = max(0, lambda_A + eps_N gh_A)                 (contact::law::normal_pressure)
+//! p_A   = max(0, lambda_A + eps_N gh_A)                 (law::normal_pressure_touching)
 //! dsh_A = (g_A^n - gt_A) / a_A,  gt_A = sum_B n1_AB x_B^n - sum_C n2_AC x_C^n
 //! t_T   = return map of the trial (contact::law::friction_traction)
 //! t_A   = p_A nu_A + t_T
@@ -20,7 +20,12 @@
 //! `x^n` are the positions and `g_A^n` the weighted gap at the last converged step, so
 //! `dsh_A` is the paper's eq. 7 (ALGORITHM.md section 6): the current weights applied to the old
 //! positions, minus the old weights applied to the old positions. A node without overlap at the
-//! last converged step has no slip history yet: `dsh_A = 0` in its first step of contact.
+//! last converged step has no slip history yet: `dsh_A = 0` in its first step of contact. The
+//! reference configuration counts as the first converged state (`commit` at `u = 0`).
+//!
+//! A gap within [`TOUCH_TOLERANCE`] `h_A` of closing counts as touching: zero pressure but the
+//! closed derivative `eps_N`, so that bodies that start in contact without load (a block resting
+//! on another) hold each other in the first Newton iteration.
 //! `nu_A` is the averaged nodal normal of the secondary surface (contact::normals), with the
 //! components of symmetry planes removed. The secondary node B receives the force
 //! `-sum_A n1_AB t_A` and the primary node C `+sum_A n2_AC t_A`; in the residual (internal
