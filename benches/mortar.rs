@@ -49,60 +49,36 @@ fn pair(kind: FaceType, degree: usize) -> (Vec<[f64; 3]>, Vec<[f64; 3]>, Integra
 
 const CASES: [(FaceType, usize); 2] = [(FaceType::Quad4, 4), (FaceType::Quad9, 8)];
 
-fn bench_pairs(c: &mut Criterion) {
-    let mut group = c.benchmark_group("mortar_pair");
+/// Throughput of one pair kernel (returning the overlap area) on the pairs of [`CASES`].
+fn bench_kernel(
+    c: &mut Criterion,
+    group_name: &str,
+    kernel: impl Fn(&FaceGeom, &FaceGeom, &IntegrationOptions, &mut RejectStats) -> f64,
+) {
+    let mut group = c.benchmark_group(group_name);
     group.throughput(Throughput::Elements(1));
     for (kind, degree) in CASES {
         let (sec, pri, opts) = pair(kind, degree);
-        let mut stats = RejectStats::default();
-        let w = integrate_pair(
-            &FaceGeom { kind, x: &sec },
-            &FaceGeom { kind, x: &pri },
-            &opts,
-            &mut stats,
-        );
-        assert!(w.area > 0.1, "{kind:?}: overlap area {}", w.area);
+        let (s, p) = (FaceGeom { kind, x: &sec }, FaceGeom { kind, x: &pri });
+        let area = kernel(&s, &p, &opts, &mut RejectStats::default());
+        assert!(area > 0.1, "{kind:?}: overlap area {area}");
         group.bench_function(kind.name(), |b| {
-            b.iter(|| {
-                let mut stats = RejectStats::default();
-                integrate_pair(
-                    &FaceGeom { kind, x: &sec },
-                    &FaceGeom { kind, x: &pri },
-                    &opts,
-                    &mut stats,
-                )
-            })
+            b.iter(|| kernel(&s, &p, &opts, &mut RejectStats::default()))
         });
     }
     group.finish();
 }
 
+fn bench_pairs(c: &mut Criterion) {
+    bench_kernel(c, "mortar_pair", |s, p, o, st| {
+        integrate_pair(s, p, o, st).area
+    });
+}
+
 fn bench_linearized_pairs(c: &mut Criterion) {
-    let mut group = c.benchmark_group("mortar_pair_linearized");
-    group.throughput(Throughput::Elements(1));
-    for (kind, degree) in CASES {
-        let (sec, pri, opts) = pair(kind, degree);
-        let mut stats = RejectStats::default();
-        let w = integrate_pair_linearized(
-            &FaceGeom { kind, x: &sec },
-            &FaceGeom { kind, x: &pri },
-            &opts,
-            &mut stats,
-        );
-        assert!(w.area > 0.1, "{kind:?}: overlap area {}", w.area);
-        group.bench_function(kind.name(), |b| {
-            b.iter(|| {
-                let mut stats = RejectStats::default();
-                integrate_pair_linearized(
-                    &FaceGeom { kind, x: &sec },
-                    &FaceGeom { kind, x: &pri },
-                    &opts,
-                    &mut stats,
-                )
-            })
-        });
-    }
-    group.finish();
+    bench_kernel(c, "mortar_pair_linearized", |s, p, o, st| {
+        integrate_pair_linearized(s, p, o, st).area
+    });
 }
 
 criterion_group!(benches, bench_pairs, bench_linearized_pairs);

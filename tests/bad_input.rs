@@ -453,6 +453,11 @@ value = [0.0, 0.0, -1.0]
             "dirichlet[2].rotation.axis",
         ),
         check(
+            "track_unknown_set",
+            valid_plus("[output]\ntrack = [\"b.nowhere\"]\n"),
+            "output.track[0]",
+        ),
+        check(
             "key_not_for_this_generator",
             valid_with("divisions = [1, 1, 1]", "divisions = [1, 1, 1]\nn_circ = 3"),
             "mesh[0].n_circ",

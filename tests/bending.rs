@@ -10,7 +10,6 @@
 mod common;
 
 use std::path::Path;
-use std::process::Command;
 
 #[test]
 #[cfg_attr(
@@ -21,10 +20,7 @@ fn one_and_two_passes_bend_like_the_conforming_mesh() {
     let study = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/bending/study.toml");
     let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("bending_study");
     let _ = std::fs::remove_dir_all(&out);
-    let status = Command::new(env!("CARGO_BIN_EXE_mortar"))
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_mpi_yield_when_idle", "1")
+    let status = common::mortar_command()
         .arg("study")
         .arg(&study)
         .arg("--out")

@@ -23,15 +23,6 @@
 mod common;
 
 use std::path::Path;
-use std::process::Command;
-
-fn mpi_command(exe: &str) -> Command {
-    let mut c = Command::new(exe);
-    c.env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_mpi_yield_when_idle", "1");
-    c
-}
 
 #[test]
 #[cfg_attr(
@@ -42,7 +33,7 @@ fn figure_7_cases_agree_and_slip_at_mu() {
     let study = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/sliding_blocks/study.toml");
     let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("figure7");
     let _ = std::fs::remove_dir_all(&out);
-    let status = mpi_command(env!("CARGO_BIN_EXE_mortar"))
+    let status = common::mortar_command()
         .arg("study")
         .arg(&study)
         .arg("--out")

@@ -12,8 +12,9 @@
 //! (the slope alone is dominated by the bulk error and would not see a poor tie); the study
 //! writes its CSV and the plot.
 
+mod common;
+
 use std::path::Path;
-use std::process::Command;
 
 #[test]
 #[cfg_attr(
@@ -24,10 +25,7 @@ fn figure_4_slopes_are_at_least_1_9() {
     let study = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/thick_sphere_tied/study.toml");
     let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("figure4");
     let _ = std::fs::remove_dir_all(&out);
-    let status = Command::new(env!("CARGO_BIN_EXE_mortar"))
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_mpi_yield_when_idle", "1")
+    let status = common::mortar_command()
         .arg("study")
         .arg(&study)
         .arg("--out")

@@ -177,6 +177,8 @@ pub struct NodeFields {
     pub normal: [f64; 3],
     /// 0 open (or no overlap), 1 stick, 2 slip.
     pub status: u8,
+    /// The weighted gap vector `g_A` (zero without overlap; not in `pass_fields`).
+    pub weighted_gap: [f64; 3],
 }
 
 /// One pass: which side carries the tractions, and its nodes' state.
@@ -234,8 +236,8 @@ pub struct ContactInterfaces {
     pub interfaces: Vec<ContactInterface>,
     rank: usize,
     node_owner: Vec<usize>,
-    /// Displacements (dof-indexed) of the last converged step.
-    u_old: Vec<f64>,
+    /// Positions of every node at the last converged step.
+    x_old: Vec<[f64; 3]>,
     /// Every pressed node sticks (the stick predictor), whatever its Coulomb cone.
     stick_all: std::cell::Cell<bool>,
 }
@@ -265,6 +267,26 @@ struct NodeBlock {
     force: Vec<f64>,
     /// Tangent, row-major `3m x 3m` (empty when not wanted).
     tangent: Vec<f64>,
+}
+
+impl ContactInterface {
+    /// What an evaluation of this interface needs at positions `x` (old positions `x_old`).
+    fn context<'a>(
+        &self,
+        stick_all: bool,
+        x: &'a [[f64; 3]],
+        x_old: &'a [[f64; 3]],
+    ) -> EvalContext<'a> {
+        EvalContext {
+            iface_mu: self.mu,
+            stick_all,
+            scheme: self.scheme,
+            degree: self.quadrature_degree,
+            scale: self.penalty_scale,
+            x,
+            x_old,
+        }
+    }
 }
 
 impl ContactInterfaces {
@@ -306,7 +328,7 @@ impl ContactInterfaces {
             interfaces,
             rank: dofs.rank,
             node_owner: dofs.node_owner.clone(),
-            u_old: vec![0.0; 3 * scene.mesh.num_nodes()],
+            x_old: scene.mesh.coords.clone(),
             stick_all: Default::default(),
         })
     }
@@ -391,19 +413,10 @@ impl ContactInterfaces {
         mut sink: impl FnMut(&NodeBlock) -> Result<()>,
     ) -> Result<Option<String>> {
         let x = current_positions(scene, u);
-        let x_old = current_positions(scene, &self.u_old);
         for iface in &self.interfaces {
             let mut stats = RejectStats::default();
             for pass in &iface.passes {
-                let ctx = EvalContext {
-                    iface_mu: iface.mu,
-                    stick_all: self.stick_all.get(),
-                    scheme: iface.scheme,
-                    degree: iface.quadrature_degree,
-                    scale: iface.penalty_scale,
-                    x: &x,
-                    x_old: &x_old,
-                };
+                let ctx = iface.context(self.stick_all.get(), &x, &self.x_old);
                 let normals = match pass.normals(&x) {
                     Ok(n) => n,
                     Err(e) => return Ok(Some(format!("interface '{}': {e}", iface.name))),
@@ -462,6 +475,7 @@ impl ContactInterfaces {
                 traction_t: [v[6], v[7], v[8]],
                 normal: [v[9], v[10], v[11]],
                 status: v[12] as u8,
+                weighted_gap: [0.0; 3],
             })
             .collect()
     }
@@ -477,16 +491,7 @@ impl ContactInterfaces {
         let iface = &self.interfaces[interface];
         let p = &iface.passes[pass];
         let x = current_positions(scene, u);
-        let x_old = current_positions(scene, &self.u_old);
-        let ctx = EvalContext {
-            iface_mu: iface.mu,
-            stick_all: self.stick_all.get(),
-            scheme: iface.scheme,
-            degree: iface.quadrature_degree,
-            scale: iface.penalty_scale,
-            x: &x,
-            x_old: &x_old,
-        };
+        let ctx = iface.context(self.stick_all.get(), &x, &self.x_old);
         let Ok(normals) = p.normals(&x) else {
             return Vec::new();
         };
@@ -709,12 +714,11 @@ impl ContactInterfaces {
         for i in 0..self.interfaces.len() {
             let mu = self.interfaces[i].mu;
             for p in 0..self.interfaces[i].passes.len() {
-                let gaps = self.owned_gaps(scene, i, p, u);
                 let fields = self.local_fields(scene, i, p, u);
                 let pass = &mut self.interfaces[i].passes[p];
                 for (a, f) in fields {
                     let st = &mut pass.state[a];
-                    st.gap_old = gaps.get(&a).copied();
+                    st.gap_old = (f.area > 0.0).then_some(f.weighted_gap);
                     if mu > 0.0 && f.normal != [0.0; 3] {
                         st.history = NodeHistory {
                             lambda_n: st.history.lambda_n,
@@ -727,38 +731,7 @@ impl ContactInterfaces {
             }
             self.interfaces[i].last_violation = f64::INFINITY;
         }
-        self.u_old.copy_from_slice(u);
-    }
-
-    /// Weighted gap vectors of the owned nodes with an overlap above [`MIN_COVERAGE`].
-    fn owned_gaps(
-        &self,
-        scene: &Scene,
-        i: usize,
-        p: usize,
-        u: &[f64],
-    ) -> BTreeMap<usize, [f64; 3]> {
-        let iface = &self.interfaces[i];
-        let pass = &iface.passes[p];
-        let x = current_positions(scene, u);
-        let ctx = EvalContext {
-            iface_mu: iface.mu,
-            stick_all: self.stick_all.get(),
-            scheme: iface.scheme,
-            degree: iface.quadrature_degree,
-            scale: iface.penalty_scale,
-            x: &x,
-            x_old: &x,
-        };
-        let mut stats = RejectStats::default();
-        let pairs = pass.integrate(&ctx, &pass.local_faces, false, &mut stats);
-        pass.pairs_by_node(&pairs, &pass.owned)
-            .into_iter()
-            .filter_map(|(a, terms)| {
-                let k = pass.kinematics(&ctx, &terms);
-                (k.area >= MIN_COVERAGE * pass.state[a].a_full).then_some((a, k.gap))
-            })
-            .collect()
+        self.x_old = current_positions(scene, u);
     }
 
     /// The state to restore if the coming step is cut.
@@ -1102,6 +1075,7 @@ impl ContactPass {
                 Status::Stick => 1,
                 Status::Slip => 2,
             },
+            weighted_gap: kin.gap,
         };
         if dp_dgh == 0.0 {
             return (None, fields);

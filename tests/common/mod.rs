@@ -22,6 +22,13 @@ pub fn write_case(name: &str, toml: &str) -> PathBuf {
     path
 }
 
+/// The `mortar` binary, with the MPI environment every run needs here.
+pub fn mortar_command() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_mortar"));
+    mpi_env(&mut c);
+    c
+}
+
 /// The MPI environment every run needs here (see shared/design/STACK.md).
 fn mpi_env(cmd: &mut Command) -> &mut Command {
     cmd.env("OMPI_ALLOW_RUN_AS_ROOT", "1")
