@@ -20,6 +20,13 @@ const MAX_STEPS: usize = 1_000_000;
 /// Largest mesh a generator may build (hexahedra per part), so a typo in `divisions` is an
 /// error rather than an exhausted memory.
 const MAX_GENERATED_ELEMENTS: usize = 20_000_000;
+/// Default tangential penalty factor of contact interfaces (see the case key
+/// `tangential_penalty`): sticking about as stiff as the element layer under the node, so that
+/// full Newton steps land inside a node's stick region instead of jumping over it.
+const DEFAULT_TANGENTIAL_PENALTY: f64 = 1.0;
+/// Default Uzawa tolerance on the slip of sticking contact nodes (see the case key
+/// `uzawa_slip_tol`).
+const DEFAULT_UZAWA_SLIP_TOL: f64 = 1e-4;
 
 /// A value's dependence on the load factor t in [0, 1].
 #[derive(Clone, Debug, PartialEq)]
@@ -163,6 +170,8 @@ pub struct Interface {
     pub friction: f64,
     /// Contact: tangential penalty factor alpha_T.
     pub tangential_penalty: f64,
+    /// Contact: Uzawa tolerance on the slip of sticking nodes (fraction of h_A).
+    pub uzawa_slip_tol: f64,
     /// Contact: penalty growth factor (1 = off) and cap (multiple of the initial penalties).
     pub penalty_growth: f64,
     pub penalty_growth_cap: f64,
@@ -573,6 +582,7 @@ fn build_interface(
         let contact_only = [
             ("friction", spec.friction.is_some()),
             ("tangential_penalty", spec.tangential_penalty.is_some()),
+            ("uzawa_slip_tol", spec.uzawa_slip_tol.is_some()),
             ("penalty_growth", spec.penalty_growth.is_some()),
             ("penalty_growth_cap", spec.penalty_growth_cap.is_some()),
         ];
@@ -643,7 +653,12 @@ fn build_interface(
     }
     let tangential_penalty = positive(
         "tangential_penalty",
-        spec.tangential_penalty.unwrap_or(penalty),
+        spec.tangential_penalty
+            .unwrap_or(DEFAULT_TANGENTIAL_PENALTY),
+    )?;
+    let uzawa_slip_tol = positive(
+        "uzawa_slip_tol",
+        spec.uzawa_slip_tol.unwrap_or(DEFAULT_UZAWA_SLIP_TOL),
     )?;
     let penalty_growth = spec.penalty_growth.unwrap_or(1.0);
     if !(penalty_growth >= 1.0 && penalty_growth.is_finite()) {
@@ -677,6 +692,7 @@ fn build_interface(
         quadrature_degree: spec.quadrature_degree,
         friction,
         tangential_penalty,
+        uzawa_slip_tol,
         penalty_growth,
         penalty_growth_cap,
     })

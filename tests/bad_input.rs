@@ -433,6 +433,16 @@ value = [0.0, 0.0, -1.0]
             "interface[0].tangential_penalty",
         ),
         check(
+            "contact_negative_uzawa_slip_tol",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\nuzawa_slip_tol = -1e-4\n"),
+            "interface[0].uzawa_slip_tol",
+        ),
+        check(
+            "uzawa_slip_tol_on_tied_interface",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"tied\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\nuzawa_slip_tol = 1e-4\n"),
+            "interface[0].uzawa_slip_tol",
+        ),
+        check(
             "contact_penalty_shrinking",
             valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\npenalty_growth = 0.5\n"),
             "interface[0].penalty_growth",

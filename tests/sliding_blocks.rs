@@ -15,10 +15,9 @@
 //!   (`slip_force_ratio` of every run);
 //! - the study writes curves.png and curves.svg.
 //!
-//! Newton converges quadratically at the end of every solve (the rate is checked on case 2 with
-//! `-snes_monitor`: the order over the last iterations of each solve that took three or more).
-//! Not yet met, and so not asserted: the at most 8 Newton iterations per step (measured
-//! up to 25 over a step's solves; see README.md, "Frictional contact").
+//! Newton on the shipped scene (case 1): at most 8 iterations per step, quadratic at the end of
+//! every solve (the order over the last iterations of each solve that took three or more), and
+//! the same displacements on 1 and 2 ranks to 1e-8.
 
 mod common;
 
@@ -72,32 +71,40 @@ fn figure_7_cases_agree_and_slip_at_mu() {
     }
 }
 
-/// Quadratic convergence at the end of the Newton solves of case 2: the order estimated from
-/// the last three residuals above round-off (1e-9 of the first), log(r3 / r2) / log(r2 / r1), as
-/// in `tests/finite_strain.rs`, over every solve with at least three iterations. The median must
-/// be at least 1.8. (Measured: median 11, because most estimates span the jump from the damped
-/// phase into the quadratic end game; 7 of 46 solves end with an estimate between 0.9 and 1.3.)
+/// Newton on the shipped scene (case 1: two passes, the defaults): at most 8 iterations in
+/// every step (the bound; `max_newton_its` counts every solve of a step, a failed
+/// full-step attempt included), quadratic ends, and the same result on 2 ranks.
+///
+/// The order of a solve is log(r3 / r2) / log(r2 / r1) over its last three residuals, taken
+/// among the residuals from its largest one on (a slide step's first full step raises the
+/// residual while the stick and slip states settle), over every solve with three residuals
+/// after that peak. The last residual is included even when it sits at round-off (about 1e-11
+/// here), which can only lower the estimate. The median must be at least 1.8 (measured 2.08 over
+/// 38 solves; a finer floor is not available: the end game takes the residual from about 1e-3
+/// to round-off in two iterations).
 #[test]
 #[cfg_attr(
     debug_assertions,
     ignore = "release only: cargo test --release --test sliding_blocks"
 )]
-fn newton_ends_quadratically() {
+fn newton_converges_quadratically_within_8_iterations() {
     let case = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/sliding_blocks/case.toml");
     let text = std::fs::read_to_string(&case)
         .unwrap()
-        .replace("passes = 2", "passes = 1")
-        .replace("petsc_options = \"petscrc\"", "");
+        .replace("petsc_options = \"petscrc\"", "")
+        .replace("vtu_every = 5", "vtu_every = 0");
     let case = common::write_case("sliding_blocks_newton", &text);
-    let (_, stdout) = common::run_case(&case, 1, &["-snes_monitor"]);
+    let (out, stdout) = common::run_case(&case, 1, &["-snes_monitor"]);
+    let most = common::metric(&out, "max_newton_its");
+    assert!(most <= 8.0, "max_newton_its {most}");
+    assert_eq!(common::metric(&out, "line_search_fallbacks"), 0.0);
     let mut orders: Vec<f64> = common::snes_monitor_histories(&stdout)
         .into_iter()
-        .filter(|h| h.len() >= 4)
         .filter_map(|h| {
-            let floor = 1e-9 * h[0];
-            let r: Vec<f64> = h.iter().copied().filter(|&v| v > floor).collect();
+            let peak = (0..h.len()).max_by(|&i, &j| h[i].total_cmp(&h[j]))?;
+            let r = &h[peak..];
             let n = r.len();
-            (n >= 3).then(|| (r[n - 1] / r[n - 2]).ln() / (r[n - 2] / r[n - 3]).ln())
+            (n >= 4).then(|| (r[n - 1] / r[n - 2]).ln() / (r[n - 2] / r[n - 3]).ln())
         })
         .collect();
     assert!(
@@ -108,4 +115,8 @@ fn newton_ends_quadratically() {
     orders.sort_by(f64::total_cmp);
     let median = orders[orders.len() / 2];
     assert!(median >= 1.8, "median order {median}; all {orders:?}");
+
+    let (out2, _) = common::run_case(&case, 2, &["-q"]);
+    let d = common::max_rel_difference(&common::displacements(&out), &common::displacements(&out2));
+    assert!(d < 1e-8, "1 and 2 ranks differ by {d:e}");
 }

@@ -70,8 +70,10 @@
 //! the violation of a node, relative to `h_A`, is the size of the normal update in gap units,
 //! `|d lambda_N| / eps_N` (the penetration of a pressed node, the multiplier an open node still
 //! holds), and the slip `|dsh_A|` of a sticking node (ALGORITHM.md section 4; a slipping node has
-//! no tangential constraint to meet). Solves repeat while the
-//! largest violation is above `uzawa_tol`, at most `uzawa_max` times per step. With
+//! no tangential constraint to meet). Solves repeat while a penetration is above `uzawa_tol`
+//! or a slip above `uzawa_slip_tol` (both relative to `h_A`; the slip tolerance is looser
+//! because with the soft default tangential penalty each update removes only part of a
+//! sticking node's slip), at most `uzawa_max` times per step. With
 //! `penalty_growth > 1`, an augmentation that did not bring the violation below a quarter of the
 //! previous one multiplies both penalties by that factor, up to `penalty_growth_cap`.
 //!
@@ -217,6 +219,8 @@ pub struct ContactInterface {
     /// Coulomb coefficient.
     pub mu: f64,
     pub uzawa_tol: f64,
+    /// Uzawa tolerance on the slip of sticking nodes (fraction of h_A).
+    pub uzawa_slip_tol: f64,
     pub uzawa_max: usize,
     penalty_growth: f64,
     penalty_growth_cap: f64,
@@ -314,6 +318,7 @@ impl ContactInterfaces {
                 scheme: iface.scheme,
                 mu: iface.friction,
                 uzawa_tol: iface.uzawa_tol,
+                uzawa_slip_tol: iface.uzawa_slip_tol,
                 uzawa_max: iface.uzawa_max,
                 penalty_growth: iface.penalty_growth,
                 penalty_growth_cap: iface.penalty_growth_cap,
@@ -625,8 +630,9 @@ impl ContactInterfaces {
     }
 
     /// One Uzawa step (collective): every interface whose largest violation exceeds its
-    /// `uzawa_tol` and that has augmentations left (`done < uzawa_max`) updates the
-    /// multipliers of its owned nodes. Returns what happened and the largest violation.
+    /// tolerances and that has augmentations left (`done < uzawa_max`) updates the
+    /// multipliers of its owned nodes. Returns what happened and the largest violation, as a
+    /// multiple of its tolerance (at most 1 when met).
     pub fn augment(
         &mut self,
         scene: &Scene,
@@ -643,7 +649,7 @@ impl ContactInterfaces {
             world.all_reduce_into(&local, &mut violation, SystemOperation::max());
             worst = worst.max(violation);
             let iface = &mut self.interfaces[i];
-            if violation <= iface.uzawa_tol || iface.uzawa_max == 0 {
+            if violation <= 1.0 || iface.uzawa_max == 0 {
                 continue;
             }
             if done >= iface.uzawa_max {
@@ -665,8 +671,8 @@ impl ContactInterfaces {
         (result, worst)
     }
 
-    /// The Uzawa update of every owned node of interface `i`: `(pass, node, violation, new
-    /// history)`.
+    /// The Uzawa update of every owned node of interface `i`: `(pass, node, violation as a
+    /// multiple of its tolerance, new history)`.
     fn uzawa_updates(
         &self,
         scene: &Scene,
@@ -702,7 +708,8 @@ impl ContactInterfaces {
                 } else {
                     0.0
                 };
-                out.push((p, a, dn.max(dt) / st.h, new));
+                let violation = (dn / iface.uzawa_tol).max(dt / iface.uzawa_slip_tol) / st.h;
+                out.push((p, a, violation, new));
             }
         }
         out

@@ -19,11 +19,9 @@
 //! Neo-Hookean Hex20 cantilever, 6 iterations per step with `basic`, 18-23 plus a cut per step
 //! with `bt`. `-snes_linesearch_type bt` (or `cp`, `l2`) still selects another.
 //!
-//! The exception is frictional contact, whose residual is only piecewise smooth (stick, slip,
-//! open): there full Newton steps cycle between stick and slip states of nodes near the Coulomb
-//! cone, and a caller asks for `bt` ([`Snes::new`]'s `line_search`). Measured on Hex8 sliding
-//! blocks (mu = 0.3): full steps fail in the first load step at every cut; `bt` converges every
-//! step, quadratically once the statuses settle.
+//! Frictional contact, whose residual is only piecewise smooth (open, stick, slip), also starts
+//! with full steps; `crate::solver` redoes a solve that they do not converge with another line
+//! search ([`Snes::set_line_search`]) before it cuts the step.
 
 use std::any::Any;
 use std::os::raw::c_void;
@@ -223,6 +221,31 @@ impl Snes {
             self.raw,
             p::PetscBool::PETSC_TRUE
         ))
+    }
+
+    /// The line search's type name (`basic`, `bt`, `l2`, ...), as set by [`Snes::new`] or the
+    /// options database.
+    pub fn line_search(&self) -> Result<String> {
+        let mut ls: p::SNESLineSearch = std::ptr::null_mut();
+        chk!(SNESGetLineSearch(self.raw, &mut ls))?;
+        let mut name: p::SNESLineSearchType = std::ptr::null();
+        chk!(SNESLineSearchGetType(ls, &mut name))?;
+        if name.is_null() {
+            return Ok(String::new());
+        }
+        // SAFETY: PETSc returns its static NUL-terminated type name.
+        Ok(unsafe { std::ffi::CStr::from_ptr(name) }
+            .to_string_lossy()
+            .into_owned())
+    }
+
+    /// Switches the line search of the next solves to `name` (`basic`, `bt`, `l2`, ...).
+    pub fn set_line_search(&mut self, name: &str) -> Result<()> {
+        let mut ls: p::SNESLineSearch = std::ptr::null_mut();
+        chk!(SNESGetLineSearch(self.raw, &mut ls))?;
+        let c = std::ffi::CString::new(name)
+            .map_err(|_| Error::Solve(format!("bad line search name {name:?}")))?;
+        chk!(SNESLineSearchSetType(ls, c.as_ptr()))
     }
 
     /// The largest number of Newton iterations of the next solves (the other tolerances are

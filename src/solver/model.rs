@@ -79,7 +79,8 @@ impl Model {
 
     /// One Uzawa step of every interface (collective): `Updated` if any multiplier changed,
     /// else `CapReached` if an interface is above its tolerance with no augmentations left,
-    /// else `Converged`. Also returns the largest contact violation (relative to h).
+    /// else `Converged`. Also returns the largest contact violation (a multiple of its
+    /// tolerance).
     pub fn augment(
         &mut self,
         scene: &Scene,
