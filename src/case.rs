@@ -148,6 +148,15 @@ pub enum InterfaceKind {
     Contact,
 }
 
+/// How a contact interface measures gap and slip.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ContactMethod {
+    /// The mortar weights (the paper's method).
+    Mortar,
+    /// Each secondary node against its closest primary face (Hallquist et al. 1985).
+    NodeOnSegment,
+}
+
 /// A validated interface between two face sets.
 #[derive(Clone, Debug)]
 pub struct Interface {
@@ -159,6 +168,8 @@ pub struct Interface {
     pub primary_set: String,
     pub primary: Vec<FaceRef>,
     pub scheme: TractionScheme,
+    /// Contact: mortar or node-on-segment (tied interfaces: mortar).
+    pub method: ContactMethod,
     /// 1 or 2.
     pub passes: usize,
     /// Penalty factor alpha (eps_A = alpha E / h_A).
@@ -583,6 +594,7 @@ fn build_interface(
             ("friction", spec.friction.is_some()),
             ("tangential_penalty", spec.tangential_penalty.is_some()),
             ("uzawa_slip_tol", spec.uzawa_slip_tol.is_some()),
+            ("method", spec.method.is_some()),
             ("penalty_growth", spec.penalty_growth.is_some()),
             ("penalty_growth_cap", spec.penalty_growth_cap.is_some()),
         ];
@@ -606,6 +618,21 @@ fn build_interface(
     }
     let scheme = TractionScheme::from_number(spec.scheme)
         .ok_or_else(|| format!("{key}.scheme = {}: must be 1, 2 or 3", spec.scheme))?;
+    let method = match spec.method.as_deref() {
+        None | Some("mortar") => ContactMethod::Mortar,
+        Some("node_on_segment") => ContactMethod::NodeOnSegment,
+        Some(m) => {
+            return Err(format!(
+                "{key}.method = \"{m}\": must be \"mortar\" or \"node_on_segment\""
+            ))
+        }
+    };
+    // Node-on-segment carries a force at every node of the secondary faces, with the node's
+    // share of the area: the faces' own shape functions (scheme 1).
+    let (scheme_key, carried_by) = match method {
+        ContactMethod::Mortar => ("scheme", scheme),
+        ContactMethod::NodeOnSegment => ("method", TractionScheme::FaceShape),
+    };
     if !matches!(spec.passes, 1 | 2) {
         return Err(format!("{key}.passes = {}: must be 1 or 2", spec.passes));
     }
@@ -620,8 +647,8 @@ fn build_interface(
         kinds.sort();
         kinds.dedup();
         for k in kinds {
-            traction_nodes(k, scheme)
-                .map_err(|e| format!("{key}.scheme on the {what} side: {e}"))?;
+            traction_nodes(k, carried_by)
+                .map_err(|e| format!("{key}.{scheme_key} on the {what} side: {e}"))?;
         }
     }
     let contact = kind == InterfaceKind::Contact;
@@ -685,6 +712,7 @@ fn build_interface(
         primary_set: spec.primary.clone(),
         primary,
         scheme,
+        method,
         passes: spec.passes,
         penalty,
         uzawa_tol,

@@ -443,6 +443,16 @@ value = [0.0, 0.0, -1.0]
             "interface[0].uzawa_slip_tol",
         ),
         check(
+            "contact_unknown_method",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\nmethod = \"nts\"\n"),
+            "interface[0].method",
+        ),
+        check(
+            "method_on_tied_interface",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"tied\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\nmethod = \"node_on_segment\"\n"),
+            "interface[0].method",
+        ),
+        check(
             "contact_penalty_shrinking",
             valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\npenalty_growth = 0.5\n"),
             "interface[0].penalty_growth",

@@ -143,6 +143,40 @@ fn contact_patch_scene() {
     }
 }
 
+/// The same patch test with node-on-segment contact (the baseline), either side secondary: it
+/// converges and its contact forces balance, but it does not pass (the classic result: a node
+/// force is not a traction interpolation). The errors are recorded here and in the scene's
+/// README (measured: lower side secondary, stress 0.66 and pressure 0.29; upper side
+/// secondary, 0.16 and 0.14), and must stay finite and below 1.
+#[test]
+fn contact_patch_with_node_on_segment_is_recorded() {
+    let base =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/contact_patch/case.toml");
+    let text = std::fs::read_to_string(base)
+        .unwrap()
+        .replace("petsc_options = \"petscrc\"", "")
+        .replace("scheme = 2", "method = \"node_on_segment\"");
+    for (name, case) in [
+        ("nts_patch_lower", text.clone()),
+        (
+            "nts_patch_upper",
+            text.replace("secondary = \"low.zmax\"", "secondary = \"UP\"")
+                .replace("primary = \"up.zmin\"", "primary = \"low.zmax\"")
+                .replace("\"UP\"", "\"up.zmin\""),
+        ),
+    ] {
+        let case = common::write_case(name, &case);
+        let (out, _) = common::run_case(&case, 1, &["-q"]);
+        let stress = common::metric(&out, "max_rel_stress_error");
+        let pressure = common::metric(&out, "max_rel_pressure_error");
+        let net = common::metric(&out, "net_contact_force");
+        println!("{name}: max_rel_stress_error {stress:.3e}, max_rel_pressure_error {pressure:.3e}, net_contact_force {net:.1e}");
+        assert!(net < 1e-12, "{name}: net contact force {net:e}");
+        assert!(stress.is_finite() && stress < 1.0, "{name}: {stress}");
+        assert!(pressure.is_finite() && pressure < 1.0, "{name}: {pressure}");
+    }
+}
+
 /// A small frictional slide (Hex8, one pass, mu = 0.3): compressed, then the upper block pushed
 /// sideways, with the upper block narrower than the lower one so that its edges slide over the
 /// lower surface.

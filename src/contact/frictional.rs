@@ -109,7 +109,7 @@ use std::collections::BTreeMap;
 use mpi::collective::{CommunicatorCollectives, SystemOperation};
 use mpi::topology::SimpleCommunicator;
 
-use crate::case::{Interface, InterfaceKind, Scene};
+use crate::case::{ContactMethod, Interface, InterfaceKind, Scene};
 use crate::contact::law::{
     friction_traction, normal_pressure_touching, uzawa_update, FrictionResult, LawParams,
     NodeHistory, Status,
@@ -119,6 +119,7 @@ use crate::contact::mortar::{
     traction_shape_on, FaceGeom, IntegrationOptions, LinearizedWeights, RejectStats,
     TractionScheme,
 };
+use crate::contact::node_on_segment::{self as nts, NodeGeometry, NodeLaw, Segment};
 use crate::contact::normals::{NodalNormals, SurfaceFace};
 use crate::contact::search::{Aabb, PrimaryTree};
 use crate::contact::tying::Augmented;
@@ -146,6 +147,13 @@ pub const EVAL_MARGIN: f64 = 0.5;
 /// Search margin of the matrix pattern made at the start of a step, in face box diagonals.
 pub const PATTERN_MARGIN: f64 = 1.0;
 
+/// Node-on-segment: primary faces whose boxes come within this many `h_A` of the node are
+/// candidates for its closest face.
+pub const NTS_MARGIN: f64 = 0.5;
+
+/// Node-on-segment: the search margin of the matrix pattern, in `h_A`.
+pub const NTS_PATTERN_MARGIN: f64 = 1.0;
+
 /// The state of one traction node that persists between Newton solves.
 #[derive(Clone, Debug, Default)]
 pub struct NodeState {
@@ -160,6 +168,8 @@ pub struct NodeState {
     pub a_full: f64,
     /// Weighted gap vector at the last converged step, if the node had an overlap then.
     pub gap_old: Option<[f64; 3]>,
+    /// Node-on-segment: the primary face and closest point of the last converged step.
+    pub segment_old: Option<(usize, [f64; 2])>,
 }
 
 /// What a node looks like at one state: the fields written to the interface output.
@@ -181,6 +191,8 @@ pub struct NodeFields {
     pub status: u8,
     /// The weighted gap vector `g_A` (zero without overlap; not in `pass_fields`).
     pub weighted_gap: [f64; 3],
+    /// Node-on-segment: the primary face and closest point (not in `pass_fields`).
+    pub segment: Option<(usize, [f64; 2])>,
 }
 
 /// One pass: which side carries the tractions, and its nodes' state.
@@ -202,6 +214,8 @@ pub struct ContactPass {
     owned: Vec<usize>,
     /// Symmetry constraints `(node, axis)` of the secondary surface (for the normals).
     symmetry: Vec<(usize, usize)>,
+    /// Mortar or node-on-segment.
+    method: ContactMethod,
 }
 
 /// A face's type and global nodes.
@@ -422,6 +436,22 @@ impl ContactInterfaces {
             let mut stats = RejectStats::default();
             for pass in &iface.passes {
                 let ctx = iface.context(self.stick_all.get(), &x, &self.x_old);
+                if pass.method == ContactMethod::NodeOnSegment {
+                    let tree = pass.primary_tree(&x);
+                    for &a in &pass.owned {
+                        let (block, _) = pass.nts_node(&ctx, &tree, a, tangent);
+                        if let Some(block) = block {
+                            if block.force.iter().any(|v| !v.is_finite()) {
+                                return Ok(Some(format!(
+                                    "interface '{}': non-finite node-on-segment force",
+                                    iface.name
+                                )));
+                            }
+                            sink(&block)?;
+                        }
+                    }
+                    continue;
+                }
                 let normals = match pass.normals(&x) {
                     Ok(n) => n,
                     Err(e) => return Ok(Some(format!("interface '{}': {e}", iface.name))),
@@ -481,6 +511,7 @@ impl ContactInterfaces {
                 normal: [v[9], v[10], v[11]],
                 status: v[12] as u8,
                 weighted_gap: [0.0; 3],
+                segment: None,
             })
             .collect()
     }
@@ -497,6 +528,14 @@ impl ContactInterfaces {
         let p = &iface.passes[pass];
         let x = current_positions(scene, u);
         let ctx = iface.context(self.stick_all.get(), &x, &self.x_old);
+        if p.method == ContactMethod::NodeOnSegment {
+            let tree = p.primary_tree(&x);
+            return p
+                .owned
+                .iter()
+                .map(|&a| (a, p.nts_node(&ctx, &tree, a, false).1))
+                .collect();
+        }
         let Ok(normals) = p.normals(&x) else {
             return Vec::new();
         };
@@ -585,19 +624,10 @@ impl ContactInterfaces {
         let x = current_positions(scene, u);
         let mut extra: BTreeMap<usize, Vec<PetscInt>> = BTreeMap::new();
         for pass in self.interfaces.iter().flat_map(|i| i.passes.iter()) {
-            let all_faces: Vec<usize> = (0..pass.sec_faces.len()).collect();
-            let candidates = pass.candidates(&x, &all_faces, PATTERN_MARGIN);
-            // Nodes coupled to each traction node: its faces and their candidate primaries.
-            let mut stencil: Vec<Vec<usize>> = vec![Vec::new(); pass.nodes.len()];
-            for (s, ms) in &candidates {
-                let mut nodes: Vec<usize> = pass.sec_faces[*s].nodes.clone();
-                for &m in ms {
-                    nodes.extend(&pass.pri_faces[m].nodes);
-                }
-                for &a in &pass.carriers[*s] {
-                    stencil[a].extend(&nodes);
-                }
-            }
+            let mut stencil = match pass.method {
+                ContactMethod::Mortar => pass.mortar_stencils(&x),
+                ContactMethod::NodeOnSegment => pass.nts_stencils(&x),
+            };
             for nodes in &mut stencil {
                 nodes.sort_unstable();
                 nodes.dedup();
@@ -726,6 +756,7 @@ impl ContactInterfaces {
                 for (a, f) in fields {
                     let st = &mut pass.state[a];
                     st.gap_old = (f.area > 0.0).then_some(f.weighted_gap);
+                    st.segment_old = f.segment;
                     if mu > 0.0 && f.normal != [0.0; 3] {
                         st.history = NodeHistory {
                             lambda_n: st.history.lambda_n,
@@ -822,10 +853,15 @@ impl ContactPass {
         };
         let sec_faces = data(sec);
         let pri_faces = data(pri);
+        // Node-on-segment: every node of the secondary faces, with its share of the area.
+        let carrier_scheme = match iface.method {
+            ContactMethod::Mortar => iface.scheme,
+            ContactMethod::NodeOnSegment => TractionScheme::FaceShape,
+        };
         let mut nodes: Vec<usize> = Vec::new();
         let mut local_carriers: Vec<Vec<usize>> = Vec::new();
         for f in &sec_faces {
-            let ks = traction_nodes(f.kind, iface.scheme).map_err(crate::Error::Mesh)?;
+            let ks = traction_nodes(f.kind, carrier_scheme).map_err(crate::Error::Mesh)?;
             let global: Vec<usize> = ks.iter().map(|&k| f.nodes[k]).collect();
             nodes.extend(&global);
             local_carriers.push(global);
@@ -839,7 +875,7 @@ impl ContactPass {
             .map(|g| g.iter().map(|n| index[n]).collect())
             .collect();
         let (a_full, sizes) =
-            full_integrals(scene, iface.scheme, &sec_faces, &carriers, nodes.len());
+            full_integrals(scene, carrier_scheme, &sec_faces, &carriers, nodes.len());
         let state = nodes
             .iter()
             .zip(a_full.iter().zip(&sizes))
@@ -881,6 +917,7 @@ impl ContactPass {
             local_faces,
             owned,
             symmetry,
+            method: iface.method,
         })
     }
 
@@ -909,12 +946,7 @@ impl ContactPass {
     /// `x`, with a search margin of `margin` box diagonals.
     fn candidates(&self, x: &[[f64; 3]], faces: &[usize], margin: f64) -> Vec<(usize, Vec<usize>)> {
         let coords = |f: &FaceData| -> Vec<[f64; 3]> { f.nodes.iter().map(|&n| x[n]).collect() };
-        let boxes: Vec<Aabb> = self
-            .pri_faces
-            .iter()
-            .map(|f| Aabb::of_points(&coords(f)))
-            .collect();
-        let tree = PrimaryTree::new(&boxes);
+        let tree = self.primary_tree(x);
         let mut found = Vec::new();
         faces
             .iter()
@@ -926,6 +958,155 @@ impl ContactPass {
                 (s, ms)
             })
             .collect()
+    }
+
+    /// The search tree of the primary faces' boxes at positions `x`.
+    fn primary_tree(&self, x: &[[f64; 3]]) -> PrimaryTree {
+        let boxes: Vec<Aabb> = self
+            .pri_faces
+            .iter()
+            .map(|f| Aabb::of_points(&f.nodes.iter().map(|&n| x[n]).collect::<Vec<_>>()))
+            .collect();
+        PrimaryTree::new(&boxes)
+    }
+
+    /// Mortar: the nodes each traction node couples (its faces and their candidate primary
+    /// faces at the pattern margin), unsorted.
+    fn mortar_stencils(&self, x: &[[f64; 3]]) -> Vec<Vec<usize>> {
+        let all_faces: Vec<usize> = (0..self.sec_faces.len()).collect();
+        let mut stencil: Vec<Vec<usize>> = vec![Vec::new(); self.nodes.len()];
+        for (s, ms) in self.candidates(x, &all_faces, PATTERN_MARGIN) {
+            let mut nodes: Vec<usize> = self.sec_faces[s].nodes.clone();
+            for m in ms {
+                nodes.extend(&self.pri_faces[m].nodes);
+            }
+            for &a in &self.carriers[s] {
+                stencil[a].extend(&nodes);
+            }
+        }
+        stencil
+    }
+
+    /// Node-on-segment: the nodes each node couples (itself, the primary faces within the
+    /// pattern margin, and its old face), unsorted.
+    fn nts_stencils(&self, x: &[[f64; 3]]) -> Vec<Vec<usize>> {
+        let tree = self.primary_tree(x);
+        let mut found = Vec::new();
+        (0..self.nodes.len())
+            .map(|a| {
+                let node = self.nodes[a];
+                let st = &self.state[a];
+                tree.query(
+                    &Aabb::of_points(&[x[node]]).inflated(NTS_PATTERN_MARGIN * st.h),
+                    &mut found,
+                );
+                let mut nodes = vec![node];
+                for &m in found.iter().chain(st.segment_old.iter().map(|(m, _)| m)) {
+                    nodes.extend(&self.pri_faces[m].nodes);
+                }
+                nodes
+            })
+            .collect()
+    }
+
+    /// Node-on-segment forces (and tangent) of node `a` on its closest primary face, and its
+    /// fields. `None` when no primary face lies under the node (its projection on every face
+    /// within [`NTS_MARGIN`] `h_A` falls outside the face) or the node is open.
+    fn nts_node(
+        &self,
+        ctx: &EvalContext,
+        tree: &PrimaryTree,
+        a: usize,
+        tangent: bool,
+    ) -> (Option<NodeBlock>, NodeFields) {
+        let st = &self.state[a];
+        let node = self.nodes[a];
+        let p = ctx.x[node];
+        let coords = |m: usize| -> Vec<[f64; 3]> {
+            self.pri_faces[m].nodes.iter().map(|&n| ctx.x[n]).collect()
+        };
+        let mut found = Vec::new();
+        tree.query(
+            &Aabb::of_points(&[p]).inflated(NTS_MARGIN * st.h),
+            &mut found,
+        );
+        let faces: Vec<(usize, Vec<[f64; 3]>)> = found.iter().map(|&m| (m, coords(m))).collect();
+        let closest = nts::closest(
+            faces.iter().map(|(m, xs)| {
+                (
+                    *m,
+                    Segment {
+                        kind: self.pri_faces[*m].kind,
+                        x: xs,
+                    },
+                )
+            }),
+            p,
+        );
+        let Some((m, projection)) = closest.filter(|(_, pr)| pr.inside) else {
+            return (None, NodeFields::default());
+        };
+        let xs = &faces.iter().find(|(k, _)| *k == m).expect("found face").1;
+        let old_x = st
+            .segment_old
+            .filter(|_| ctx.iface_mu > 0.0)
+            .map(|(mo, xi)| (mo, coords(mo), xi));
+        let geo = NodeGeometry {
+            x_node: p,
+            segment: Segment {
+                kind: self.pri_faces[m].kind,
+                x: xs,
+            },
+            projection,
+            old: old_x.as_ref().map(|(mo, xo, xi)| {
+                (
+                    Segment {
+                        kind: self.pri_faces[*mo].kind,
+                        x: xo,
+                    },
+                    *xi,
+                )
+            }),
+        };
+        let law = NodeLaw {
+            history: &st.history,
+            params: self.law_params(st, ctx.iface_mu, ctx.scale),
+            touch: TOUCH_TOLERANCE * st.h,
+            area: st.a_full,
+            stick_all: ctx.stick_all,
+        };
+        let Some(c) = nts::node_contribution(&geo, &law, tangent) else {
+            return (None, NodeFields::default());
+        };
+        let fields = NodeFields {
+            area: st.a_full,
+            gap: c.gh,
+            pressure: c.pressure,
+            slip: c.slip,
+            traction_t: c.friction.traction,
+            normal: c.nu,
+            status: match c.friction.status {
+                Status::Open => 0,
+                Status::Stick => 1,
+                Status::Slip => 2,
+            },
+            weighted_gap: [0.0; 3],
+            segment: Some((m, projection.xi)),
+        };
+        if c.dp_dgh == 0.0 {
+            return (None, fields);
+        }
+        let mut slots = vec![node];
+        slots.extend(&self.pri_faces[m].nodes);
+        if let Some((mo, _, _)) = &old_x {
+            slots.extend(&self.pri_faces[*mo].nodes);
+        }
+        let block = NodeBlock {
+            slots,
+            force: c.force,
+            tangent: c.tangent,
+        };
+        (Some(block), fields)
     }
 
     /// Integrates every candidate pair of `faces`, in canonical order.
@@ -1083,6 +1264,7 @@ impl ContactPass {
                 Status::Slip => 2,
             },
             weighted_gap: kin.gap,
+            segment: None,
         };
         if dp_dgh == 0.0 {
             return (None, fields);

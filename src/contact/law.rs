@@ -168,7 +168,8 @@ pub struct FrictionResult {
 }
 
 impl FrictionResult {
-    fn zero(status: Status) -> FrictionResult {
+    /// No traction, no derivatives, with `status`.
+    pub(crate) fn zero(status: Status) -> FrictionResult {
         FrictionResult {
             traction: [0.0; 3],
             status,

@@ -16,6 +16,7 @@
 pub mod frictional;
 pub mod law;
 pub mod mortar;
+pub mod node_on_segment;
 pub mod normals;
 pub mod search;
 pub mod tying;

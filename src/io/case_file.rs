@@ -295,6 +295,12 @@ pub struct InterfaceSpec {
     /// Contact: Coulomb friction coefficient mu >= 0. Default 0: frictionless, and then no
     /// friction work is done at all (no slip, no return map).
     pub friction: Option<f64>,
+    /// Contact: how gap and slip are measured. `"mortar"` (default): the mortar weights of the
+    /// paper. `"node_on_segment"`: the baseline of Hallquist, Goudreau and Benson (1985), each
+    /// node of the secondary faces against its closest primary face (`contact::node_on_segment`);
+    /// the same laws, penalties and Uzawa keys; `scheme` and `quadrature_degree` do not apply,
+    /// and faces whose nodal areas are not all positive (Quad8, Tri6) are refused.
+    pub method: Option<String>,
     /// Contact: tangential penalty factor alpha_T (eps_T = alpha_T E / h_A, the stiffness of
     /// sticking). Default 1: a sticking node is then about as stiff as the element layer under
     /// it. Much stiffer sticking makes full Newton steps jump over the small stick region of a
