@@ -244,6 +244,9 @@ pub struct Scene {
     pub predictor: bool,
     /// Frictional steps start with a stick solve (see `solver`).
     pub stick_predictor: bool,
+    /// An unconverged step is accepted and the run goes on (`steps.on_failure = "continue"`)
+    /// instead of being cut.
+    pub continue_on_failure: bool,
     pub newton: crate::io::case_file::NewtonSpec,
     pub vtu_every: usize,
     pub verification: Option<Verification>,
@@ -536,6 +539,15 @@ impl Scene {
             max_cuts: file.steps.max_cuts,
             predictor: file.steps.predictor,
             stick_predictor: file.steps.stick_predictor,
+            continue_on_failure: match file.steps.on_failure.as_str() {
+                "cut" => false,
+                "continue" => true,
+                other => {
+                    return Err(err(format!(
+                        "steps.on_failure = \"{other}\": must be \"cut\" or \"continue\""
+                    )))
+                }
+            },
             newton: file.newton.clone(),
             vtu_every: file.output.vtu_every,
             verification,

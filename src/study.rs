@@ -79,8 +79,14 @@
 //! one x, the last in load order). Reference points outside the variant's x range, and those
 //! with `y_ref = 0`, are skipped; when none is left there is no metric. A run that failed or
 //! diverged is still plotted with the points it has (its converged steps) and compared over the
-//! overlap; one that failed before its first step has no points. The column names are checked
-//! against the first run's `history.csv`, so a misspelt one stops the study after one run.
+//! overlap; one that failed before its first step has no points. Steps accepted without
+//! convergence (`steps.on_failure = "continue"`: `converged` = 0 in the history) are crossed out
+//! on the plot, and the legend gives their number and, for a run that stopped early, the x
+//! where it stopped. Every variant also gets `smoothness_<variant>`: the largest change of y
+//! between consecutive points with `x > after` over the mean change (about 1-2 for a smooth
+//! curve of even steps; a spike k times the typical step gives about k). The column names are
+//! checked against the first run's `history.csv`, so a misspelt one stops the study after one
+//! run.
 //!
 //! # Outputs (in `--out DIR`, default `out/<study file stem>`; written by rank 0)
 //!
@@ -93,7 +99,8 @@
 //!   every run converged, `metrics`: `slope_<variant>` (least-squares slope of log(error)
 //!   against log(h) over the variant's converged runs, when there are two or more) and
 //!   `error_<variant>_<level>`, plus `failed_runs`, and with `[curves]`
-//!   `curve_max_rel_diff_<variant>` (see above, added once every run is done); `timings.total`;
+//!   `curve_max_rel_diff_<variant>` and `smoothness_<variant>` (see above, added once every
+//!   run is done); `timings.total`;
 //!   `message` lists the failed runs. Rewritten after every run.
 //! - `convergence.png`, `convergence.svg`: the log-log plot of error against h, one line per
 //!   variant, the slopes in the legend ([`crate::io::plot::loglog`]); only with 2 or more
@@ -103,7 +110,8 @@
 //!
 //! A failed run (not converged, a bad PETSc option, ...) is recorded (`converged = false`, no
 //! point on the convergence plot) and the study goes on; when any failed, the study returns an
-//! error after writing everything. A metric missing from a converged run's summary stops the
+//! error after writing everything, unless every failed run belongs to a variant with
+//! `may_fail = true` (a baseline expected to break). A metric missing from a converged run's summary stops the
 //! study: it would be missing from every run.
 
 use std::collections::BTreeSet;
@@ -207,6 +215,11 @@ pub struct VariantSpec {
     /// conforming mesh where the others are dissimilar). Default: none.
     #[serde(default)]
     pub refinement_set: Vec<toml::Table>,
+    /// A baseline expected to break (node-on-segment in the paper's Figure 7): when its run
+    /// fails, the failure is recorded, plotted and reported as for any run, but does not make
+    /// the study fail. Default false.
+    #[serde(default)]
+    pub may_fail: bool,
 }
 
 /// A validated study.
@@ -577,6 +590,7 @@ impl Study {
                     .map(|v| plot::Series {
                         name: v.name.clone(),
                         points: points_of(&runs, &v.name),
+                        ..Default::default()
                     })
                     .collect();
                 let warnings = plot::loglog(
@@ -602,16 +616,22 @@ impl Study {
                 done.push(format!("slopes {}", slopes.join(", ")));
             }
             if let Some(curves) = &self.curves {
-                let diffs = self.write_curves(curves, out)?;
-                for (name, d) in &diffs {
+                let figures = self.write_curves(curves, out)?;
+                for (name, d) in &figures.differences {
                     if let Some(d) = d {
                         summary
                             .metrics
                             .insert(format!("{}_{name}", curves.metric), *d);
                     }
                 }
+                for (name, s) in &figures.smoothness {
+                    if let Some(s) = s {
+                        summary.metrics.insert(format!("smoothness_{name}"), *s);
+                    }
+                }
                 summary.write(&out.join("summary.json"))?;
-                let diffs: Vec<String> = diffs
+                let diffs: Vec<String> = figures
+                    .differences
                     .iter()
                     .map(|(name, d)| match d {
                         Some(d) => format!("{name} {d:.3e}"),
@@ -636,20 +656,26 @@ impl Study {
                 out.display()
             ));
         }
-        if failed > 0 {
-            let first = runs
+        let may_fail = |r: &&RunRecord| {
+            self.variants
                 .iter()
-                .find(|r| !r.converged)
-                .map_or(String::new(), |r| {
-                    format!(
-                        "; first: {} level {}: {}",
-                        r.variant,
-                        r.level,
-                        r.message.as_deref().unwrap_or("not converged")
-                    )
-                });
+                .any(|v| v.name == r.variant && v.may_fail)
+        };
+        let unexpected = runs.iter().filter(|r| !r.converged && !may_fail(r)).count();
+        if unexpected > 0 {
+            let first =
+                runs.iter()
+                    .find(|r| !r.converged && !may_fail(r))
+                    .map_or(String::new(), |r| {
+                        format!(
+                            "; first: {} level {}: {}",
+                            r.variant,
+                            r.level,
+                            r.message.as_deref().unwrap_or("not converged")
+                        )
+                    });
             return Err(Error::Solve(format!(
-                "study {}: {failed} of {total} runs failed (see {}){first}",
+                "study {}: {unexpected} of {total} runs failed (see {}){first}",
                 self.name,
                 out.join("study.csv").display()
             )));
@@ -697,16 +723,13 @@ impl Study {
     /// Reads every variant's curve at the last level, writes `curves.png` and `curves.svg`
     /// (rank 0), and returns the largest relative difference of every variant but the
     /// reference to the reference (see the module docs), in variant order.
-    fn write_curves(&self, curves: &Curves, out: &Path) -> Result<Vec<(String, Option<f64>)>> {
+    fn write_curves(&self, curves: &Curves, out: &Path) -> Result<CurveFigures> {
         let level = self.refinements.len() - 1;
         let mut series = Vec::with_capacity(self.variants.len());
         for v in &self.variants {
-            let history = out
-                .join("runs")
-                .join(&v.name)
-                .join(level.to_string())
-                .join("history.csv");
-            let points = if history.is_file() {
+            let run_dir = out.join("runs").join(&v.name).join(level.to_string());
+            let history = run_dir.join("history.csv");
+            let (points, flagged) = if history.is_file() {
                 let (columns, rows) = read_csv(&history)?;
                 let (ix, iy) =
                     curves
@@ -715,9 +738,14 @@ impl Study {
                             file: self.file.clone(),
                             msg,
                         })?;
-                rows.iter()
-                    .map(|r| (r[ix], if curves.abs { r[iy].abs() } else { r[iy] }))
-                    .collect()
+                let point = |r: &Vec<f64>| (r[ix], if curves.abs { r[iy].abs() } else { r[iy] });
+                let converged = columns.iter().position(|c| c == "converged");
+                let flagged = rows
+                    .iter()
+                    .filter(|r| converged.is_some_and(|c| r[c] == 0.0))
+                    .map(point)
+                    .collect();
+                (rows.iter().map(point).collect(), flagged)
             } else {
                 eprintln!(
                     "mortar: warning: curves: variant '{}' has no {} (no converged step): no \
@@ -725,11 +753,15 @@ impl Study {
                     v.name,
                     history.display()
                 );
-                Vec::new()
+                (Vec::new(), Vec::new())
             };
+            let stopped = Summary::read(&run_dir.join("summary.json"))
+                .map(|s| !s.converged)
+                .unwrap_or(true);
             series.push(plot::Series {
-                name: v.name.clone(),
+                name: curve_legend(&v.name, &points, &flagged, stopped),
                 points,
+                flagged,
             });
         }
         warn(plot::lines(
@@ -739,21 +771,23 @@ impl Study {
             &curves.y_label,
             &series,
         )?);
-        let reference = series
+        let reference = self
+            .variants
             .iter()
-            .find(|s| s.name == curves.reference)
-            .map(|s| s.points.clone())
+            .zip(&series)
+            .find(|(v, _)| v.name == curves.reference)
+            .map(|(_, s)| s.points.clone())
             .unwrap_or_default();
-        Ok(series
-            .iter()
-            .filter(|s| s.name != curves.reference)
-            .map(|s| {
-                (
-                    s.name.clone(),
-                    max_rel_diff(&reference, &s.points, curves.after),
-                )
-            })
-            .collect())
+        let named = || self.variants.iter().map(|v| v.name.clone()).zip(&series);
+        Ok(CurveFigures {
+            differences: named()
+                .filter(|(name, _)| *name != curves.reference)
+                .map(|(name, s)| (name, max_rel_diff(&reference, &s.points, curves.after)))
+                .collect(),
+            smoothness: named()
+                .map(|(name, s)| (name, smoothness(&s.points, curves.after)))
+                .collect(),
+        })
     }
 
     /// The study summary of the runs so far.
@@ -823,6 +857,57 @@ impl Curves {
 /// `y_v` the `other` curve linearly interpolated at `x` ([`interpolate`]); reference points
 /// outside the other curve's x range, or with `y_ref = 0`, are skipped. `None` if no point is
 /// compared.
+/// What `[curves]` measures: per variant, the largest relative difference to the reference
+/// (not for the reference itself) and the smoothness figure.
+struct CurveFigures {
+    differences: Vec<(String, Option<f64>)>,
+    smoothness: Vec<(String, Option<f64>)>,
+}
+
+/// The legend entry of a curve: the variant's name, with the number of crossed-out
+/// (unconverged) steps and, for a run that stopped early, the x where it stopped.
+fn curve_legend(
+    name: &str,
+    points: &[(f64, f64)],
+    flagged: &[(f64, f64)],
+    stopped: bool,
+) -> String {
+    let mut notes = Vec::new();
+    if !flagged.is_empty() {
+        notes.push(format!("{} unconverged steps (x)", flagged.len()));
+    }
+    if stopped {
+        match points.last() {
+            Some(&(x, _)) => notes.push(format!("stopped at {x:.3}")),
+            None => notes.push("failed".to_string()),
+        }
+    }
+    if notes.is_empty() {
+        name.to_string()
+    } else {
+        format!("{name}: {}", notes.join(", "))
+    }
+}
+
+/// Smoothness of a curve: the largest change of `y` between consecutive points (load order)
+/// over the mean change, over the points with `x > after`. About 1-2 for a smooth curve of
+/// even steps; a spike of `k` times the typical step gives about `k`. `None` with fewer than
+/// two changes or no change at all.
+fn smoothness(points: &[(f64, f64)], after: f64) -> Option<f64> {
+    let ys: Vec<f64> = points
+        .iter()
+        .filter(|&&(x, y)| x > after && x.is_finite() && y.is_finite())
+        .map(|p| p.1)
+        .collect();
+    let steps: Vec<f64> = ys.windows(2).map(|w| (w[1] - w[0]).abs()).collect();
+    if steps.len() < 2 {
+        return None;
+    }
+    let mean = steps.iter().sum::<f64>() / steps.len() as f64;
+    let largest = steps.iter().copied().fold(0.0, f64::max);
+    (mean > 0.0).then(|| largest / mean)
+}
+
 fn max_rel_diff(reference: &[(f64, f64)], other: &[(f64, f64)], after: f64) -> Option<f64> {
     let curve = by_x(other);
     reference
@@ -1047,6 +1132,38 @@ fn set_in_value(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn smoothness_is_one_for_even_steps_and_flags_a_spike() {
+        let even: Vec<(f64, f64)> = (0..10)
+            .map(|i| (f64::from(i), 2.0 * f64::from(i)))
+            .collect();
+        assert_eq!(smoothness(&even, -1.0), Some(1.0));
+        // One step of 10 among eight of 2: mean 26/9, largest 10.
+        let mut spiky = even.clone();
+        for p in spiky.iter_mut().skip(5) {
+            p.1 += 8.0;
+        }
+        let s = smoothness(&spiky, -1.0).unwrap();
+        assert!((s - 90.0 / 26.0).abs() < 1e-12, "{s}");
+        // Only the points after x = 4.5 count: the spike at 4 -> 5 is left out.
+        assert_eq!(smoothness(&spiky, 4.5), Some(1.0));
+        assert_eq!(smoothness(&even[..2], -1.0), None);
+        assert_eq!(
+            smoothness(&[(0.0, 1.0), (1.0, 1.0), (2.0, 1.0)], -1.0),
+            None
+        );
+    }
+
+    #[test]
+    fn curve_legend_names_unconverged_steps_and_early_stops() {
+        assert_eq!(curve_legend("a", &[(0.0, 1.0)], &[], false), "a");
+        assert_eq!(
+            curve_legend("b", &[(0.0, 1.0), (0.25, 2.0)], &[(0.25, 2.0)], true),
+            "b: 1 unconverged steps (x), stopped at 0.250"
+        );
+        assert_eq!(curve_legend("c", &[], &[], true), "c: failed");
+    }
 
     fn case() -> toml::Table {
         toml::from_str(

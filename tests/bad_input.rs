@@ -493,6 +493,11 @@ value = [0.0, 0.0, -1.0]
             "steps.count",
         ),
         check(
+            "steps_unknown_on_failure",
+            valid_plus("[steps]\ncount = 1\non_failure = \"ignore\"\n"),
+            "steps.on_failure",
+        ),
+        check(
             "newton_rtol_zero",
             valid_plus("[newton]\nrtol = 0.0\n"),
             "rtol",

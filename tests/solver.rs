@@ -132,6 +132,41 @@ fn a_step_that_cannot_be_cut_fails_clearly() {
     assert_eq!(u_max, 0.0);
 }
 
+/// `steps.on_failure = "continue"`: a step Newton does not converge (here: one iteration
+/// allowed on a finite-strain compression) is accepted, marked `converged = 0` in the history
+/// and counted in the summary, and the run goes on to the end; with the default the same run
+/// stops.
+#[test]
+fn unconverged_steps_are_accepted_and_recorded_on_request() {
+    let base = common::compressed_block("hex8", 0.2, 3)
+        .replace("[steps]\n", "[steps]\nmax_cuts = 0\n")
+        + "[newton]\nmax_it = 1\n";
+    let strict = common::write_case("unconverged_strict", &base);
+    let out = common::run_raw(&strict, 1, &strict.parent().unwrap().join("out"), &["-q"]);
+    assert!(
+        !out.status.success(),
+        "one Newton iteration should not converge"
+    );
+
+    let toml = base.replace("[steps]\n", "[steps]\non_failure = \"continue\"\n");
+    let case = common::write_case("unconverged_continue", &toml);
+    let (out_dir, _) = common::run_case(&case, 1, &["-q"]);
+    assert_eq!(common::metric(&out_dir, "unconverged_steps"), 3.0);
+    let text = std::fs::read_to_string(out_dir.join("history.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = header.iter().position(|h| *h == "converged").unwrap();
+    let flags: Vec<&str> = lines.map(|l| l.split(',').nth(col).unwrap()).collect();
+    assert_eq!(flags, ["0", "0", "0"]);
+    let s = common::summary(&out_dir);
+    assert_eq!(s["steps"].as_array().unwrap().len(), 3);
+    assert!(s["steps"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|st| st["converged"] == false));
+}
+
 /// `-log_view` shows the solver's phases as PETSc log stages.
 #[test]
 fn phases_are_petsc_log_stages() {

@@ -343,6 +343,20 @@ pub struct StepsSpec {
     /// passes it cost many cut steps. With the default soft sticking it is not needed.
     #[serde(default)]
     pub stick_predictor: bool,
+    /// What happens when a step's Newton solve does not converge and no cut is left (a failed
+    /// solve is first redone with half the increment, at most `max_cuts` times; every cut is
+    /// counted in `history.csv`). `"cut"` (default): the run stops. `"continue"`: the state
+    /// Newton reached is accepted as the step's result, marked `converged = 0` in
+    /// `history.csv` and counted in the summary (`unconverged_steps`), and the run goes on; a
+    /// state outside the domain (an inverted element, NaN) still ends it.
+    /// For baselines such as node-on-segment, whose failures are part of what is measured
+    /// (the paper lets its two-pass node-on-segment run go on through unconverged steps).
+    #[serde(default = "cut")]
+    pub on_failure: String,
+}
+
+fn cut() -> String {
+    "cut".into()
 }
 
 impl Default for StepsSpec {
@@ -352,6 +366,7 @@ impl Default for StepsSpec {
             max_cuts: 6,
             predictor: true,
             stick_predictor: false,
+            on_failure: cut(),
         }
     }
 }

@@ -20,6 +20,7 @@
 //!
 //! Every series is a line; its points are marked (circle, triangle, square, ... by series), every
 //! point for a series of at most 30 (`MARKERS`) points, else every k-th so that about 30 are.
+//! In [`lines`], a series' `flagged` points get a black cross on top.
 //! The legend sits in the corner of the plot that hides the least of the curves. In [`loglog`]
 //! it gives every series' least-squares slope of log(error) against log(h) ([`fitted_slope`]),
 //! the observed order of convergence; in [`lines`], the series' names.
@@ -37,13 +38,16 @@ use crate::io::output::write_atomic;
 use crate::{Error, Result};
 
 /// One curve of a plot.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Series {
     /// Legend entry (in [`loglog`], the fitted slope is appended).
     pub name: String,
     /// `(x, y)` points, in drawing order: `(h, error)` in [`loglog`], where both must be positive
     /// and finite to appear; in [`lines`], both must be finite.
     pub points: Vec<(f64, f64)>,
+    /// Points to flag with a black cross on top of the curve (e.g. load steps accepted without
+    /// convergence); [`lines`] only.
+    pub flagged: Vec<(f64, f64)>,
 }
 
 /// Font files tried, in order, for the plot text.
@@ -210,6 +214,8 @@ struct Plot<'a, A: Axis> {
     y_label: &'a str,
     /// Legend entries and the points that can be shown.
     curves: Vec<(String, Vec<(f64, f64)>)>,
+    /// Points to cross out (finite ones of every series' `flagged`).
+    flagged: Vec<(f64, f64)>,
     x: A,
     y: A,
     text: bool,
@@ -245,6 +251,7 @@ impl<'a> Plot<'a, LogAxis> {
             x_label,
             y_label,
             curves,
+            flagged: Vec::new(),
             x,
             y,
             text,
@@ -275,11 +282,17 @@ impl<'a> Plot<'a, LinearAxis> {
         let all: Vec<(f64, f64)> = curves.iter().flat_map(|c| c.1.iter().copied()).collect();
         let x = LinearAxis::around(all.iter().map(|p| p.0), 0.04, (0.0, 1.0));
         let y = LinearAxis::around(all.iter().map(|p| p.1), 0.04, (0.0, 1.0));
+        let flagged = series
+            .iter()
+            .flat_map(|s| s.flagged.iter().copied())
+            .filter(|&(x, y)| LinearAxis::shows(x) && LinearAxis::shows(y))
+            .collect();
         Plot {
             title,
             x_label,
             y_label,
             curves,
+            flagged,
             x,
             y,
             text,
@@ -423,6 +436,9 @@ impl<A: Axis> Plot<'_, A> {
                 marker(root, i, chart.backend_coord(p), color).map_err(e)?;
             }
         }
+        for p in &self.flagged {
+            cross(root, chart.backend_coord(p)).map_err(e)?;
+        }
         if self.text && !self.curves.is_empty() {
             let pixels: Vec<Vec<(i32, i32)>> = self
                 .curves
@@ -530,6 +546,23 @@ fn legend_corner(
         }
     }
     best
+}
+
+/// A black cross (a flagged point) at pixel `at`.
+fn cross<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    (x, y): (i32, i32),
+) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    const S: i32 = 7;
+    let style = BLACK.stroke_width(2);
+    root.draw(&PathElement::new(
+        vec![(x - S, y - S), (x + S, y + S)],
+        style,
+    ))?;
+    root.draw(&PathElement::new(
+        vec![(x - S, y + S), (x + S, y - S)],
+        style,
+    ))
 }
 
 /// Marker `shape` (circle, triangle, square, diamond, cross, by series) at pixel `at`.
@@ -1007,10 +1040,12 @@ mod tests {
             Series {
                 name: "hex8".into(),
                 points: hs.iter().map(|&h| (h, 0.3 * h)).collect(),
+                ..Default::default()
             },
             Series {
                 name: "hex20".into(),
                 points: hs.iter().map(|&h| (h, 0.1 * h * h)).collect(),
+                ..Default::default()
             },
         ]
     }
@@ -1056,6 +1091,7 @@ mod tests {
         let s = vec![Series {
             name: "x".into(),
             points: vec![(0.5, 0.1), (0.25, f64::NAN), (0.0, 1.0)],
+            ..Default::default()
         }];
         let w = loglog(&dir.join("c"), "T", "h", "e", &s).unwrap();
         assert!(w.iter().any(|w| w.contains("2 point(s) of 'x'")), "{w:?}");
@@ -1150,6 +1186,7 @@ mod tests {
             points: (0..300)
                 .map(|i| (f64::from(i), f64::from(i).sin()))
                 .collect(),
+            ..Default::default()
         }];
         lines(&dir.join("m"), "T", "x", "y", &s).unwrap();
         let svg = std::fs::read_to_string(dir.join("m.svg")).unwrap();
@@ -1169,16 +1206,19 @@ mod tests {
                 points: (0..=4)
                     .map(|i| (-0.05 * f64::from(i), -12.0 * f64::from(i)))
                     .collect(),
+                ..Default::default()
             },
             Series {
                 name: "stiff".into(),
                 points: (0..=4)
                     .map(|i| (-0.05 * f64::from(i), -24.0 * f64::from(i)))
                     .collect(),
+                flagged: vec![(-0.1, -48.0)],
             },
             Series {
                 name: "failed".into(),
                 points: vec![],
+                ..Default::default()
             },
         ];
         let warnings = lines(&stem, "Reaction", "u_z", "reaction", &series).unwrap();
@@ -1223,10 +1263,12 @@ mod tests {
                     (f64::INFINITY, 2.0),
                     (-1.0, -3.0),
                 ],
+                ..Default::default()
             },
             Series {
                 name: "negative".into(),
                 points: vec![(-1.0, -1.0), (-2.0, -5.0)],
+                ..Default::default()
             },
         ];
         let w = lines(&dir.join("c"), "T", "x", "y", &s).unwrap();

@@ -195,6 +195,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         let mut x_guess = x.duplicate()?;
         let mut x_attempt = x.duplicate()?;
         let mut fallbacks = 0usize;
+        let mut unconverged = 0usize;
         while t < 1.0 - 1e-12 {
             let t_new = if t + dt > 1.0 - 1e-9 { 1.0 } else { t + dt };
             x.copy_to(&mut x_prev)?;
@@ -344,38 +345,47 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                      body can move rigidly; constrain it (dirichlet or symmetry sets)"
                 )));
             }
+            let mut accepted_unconverged = false;
             if !outcome.converged {
-                cuts_in_row += 1;
                 let why = outcome
                     .domain_error
                     .clone()
                     .unwrap_or_else(|| outcome.reason.to_string());
-                x_prev.copy_to(&mut x)?;
-                model.tying.set_multipliers(&multipliers);
-                model.contact.restore(&contact_saved);
                 // Bounded in depth, not only in a row: fail/converge cycles cannot shrink the step
                 // below dt_nominal / 2^max_cuts.
-                let giving_up = cuts_in_row > scene.max_cuts || 0.5 * dt < dt_min;
-                say(format!(
-                    "  step {} load {t_new:.6}: not converged ({why}) after {} Newton its; {}",
-                    step + 1,
-                    outcome.iterations,
-                    if giving_up {
-                        format!("no cuts left ({} allowed)", scene.max_cuts)
-                    } else {
-                        format!("cut {cuts_in_row}/{}", scene.max_cuts)
-                    }
-                ));
-                if giving_up {
-                    summary.message = Some(format!(
-                        "step {} (load {t_new}) did not converge after {} cuts: {why}",
+                let giving_up = cuts_in_row + 1 > scene.max_cuts || 0.5 * dt < dt_min;
+                // `steps.on_failure = "continue"`: with no cut left, a state Newton reached
+                // inside the domain is the step's (unconverged) result.
+                accepted_unconverged = giving_up
+                    && scene.continue_on_failure
+                    && outcome.domain_error.is_none()
+                    && x.norm2()?.is_finite();
+                if !accepted_unconverged {
+                    cuts_in_row += 1;
+                    x_prev.copy_to(&mut x)?;
+                    model.tying.set_multipliers(&multipliers);
+                    model.contact.restore(&contact_saved);
+                    say(format!(
+                        "  step {} load {t_new:.6}: not converged ({why}) after {} Newton its; {}",
                         step + 1,
-                        scene.max_cuts
+                        outcome.iterations,
+                        if giving_up {
+                            format!("no cuts left ({} allowed)", scene.max_cuts)
+                        } else {
+                            format!("cut {cuts_in_row}/{}", scene.max_cuts)
+                        }
                     ));
-                    break;
+                    if giving_up {
+                        summary.message = Some(format!(
+                            "step {} (load {t_new}) did not converge after {} cuts: {why}",
+                            step + 1,
+                            scene.max_cuts
+                        ));
+                        break;
+                    }
+                    dt *= 0.5;
+                    continue;
                 }
-                dt *= 0.5;
-                continue;
             }
             step += 1;
             t = t_new;
@@ -402,6 +412,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                 newton_its: newton_total,
                 augmentations,
                 cuts: cuts_in_row,
+                converged: outcome.converged,
                 linear_its: linear_total,
                 residual: final_res,
                 reactions: &reactions,
@@ -420,11 +431,19 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                 load: t,
                 newton_its: newton_total,
                 cut: cuts_in_row,
-                converged: true,
+                converged: outcome.converged,
                 augmentations,
             });
             drop(output_guard);
             phases.add("output", t_out.elapsed().as_secs_f64());
+            if accepted_unconverged {
+                unconverged += 1;
+                say(format!(
+                    "  step {step} load {t:.6}: NOT converged ({}) after {newton_total} Newton \
+                     its, |F| {final_res:.3e}; accepted (steps.on_failure = \"continue\")",
+                    outcome.reason
+                ));
+            }
             say(format!(
                 "  step {step} load {t:.6}: {newton_total} Newton its{}, |F| {final_res:.3e}, {} linear its{}, {:.2} s",
                 if augmentations > 0 { format!(" ({augmentations} Uzawa augmentations)") } else { String::new() },
@@ -489,6 +508,11 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
             summary
                 .metrics
                 .insert("max_augmentations_per_step".into(), most as f64);
+        }
+        if scene.continue_on_failure {
+            summary
+                .metrics
+                .insert("unconverged_steps".into(), unconverged as f64);
         }
         let newton: Vec<usize> = summary.steps.iter().map(|s| s.newton_its).collect();
         summary.metrics.insert(

@@ -38,6 +38,8 @@ pub struct StepRow<'a> {
     pub newton_its: usize,
     pub augmentations: usize,
     pub cuts: usize,
+    /// False for a step accepted without convergence (`steps.on_failure = "continue"`).
+    pub converged: bool,
     pub linear_its: usize,
     pub residual: f64,
     pub reactions: &'a [[f64; 3]],
@@ -81,6 +83,7 @@ impl Results {
                 "newton_its",
                 "augmentations",
                 "cuts",
+                "converged",
                 "linear_its",
                 "residual",
             ]
@@ -298,6 +301,7 @@ impl Results {
             r.newton_its as f64,
             r.augmentations as f64,
             r.cuts as f64,
+            if r.converged { 1.0 } else { 0.0 },
             r.linear_its as f64,
             r.residual,
         ];
