@@ -216,6 +216,8 @@ pub struct Scene {
     pub dir: PathBuf,
     /// PETSc options file, if any.
     pub petsc_options: Option<PathBuf>,
+    /// The study `mortar run` runs after the scene (`output.figure`), resolved.
+    pub figure: Option<PathBuf>,
     pub mesh: Mesh,
     /// Material of each body (index = body).
     pub materials: Vec<Material>,
@@ -284,6 +286,19 @@ impl Scene {
                 if !full.is_file() {
                     return Err(err(format!(
                         "petsc_options = \"{p}\": no such file {}",
+                        full.display()
+                    )));
+                }
+                Some(full)
+            }
+            None => None,
+        };
+        let figure = match &file.output.figure {
+            Some(f) => {
+                let full = dir.join(f);
+                if !full.is_file() {
+                    return Err(err(format!(
+                        "output.figure = \"{f}\": no such file {}",
                         full.display()
                     )));
                 }
@@ -523,6 +538,7 @@ impl Scene {
             name,
             dir,
             petsc_options,
+            figure,
             mesh,
             materials,
             curves,

@@ -47,6 +47,9 @@ enum Command {
         /// No progress lines.
         #[arg(long, short)]
         quiet: bool,
+        /// Do not run the scene's figure study (`output.figure`) after the scene.
+        #[arg(long)]
+        no_figure: bool,
         /// PETSc options, passed to PETSc unchanged.
         #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
         petsc: Vec<String>,
@@ -161,8 +164,9 @@ fn execute(cli: Cli, program: String) -> Result<()> {
             case,
             out,
             quiet,
+            no_figure,
             petsc,
-        } => run_command(&case, out, quiet, program, petsc),
+        } => run_command(&case, out, quiet, !no_figure, program, petsc),
         Command::Study {
             study,
             out,
@@ -180,10 +184,14 @@ fn execute(cli: Cli, program: String) -> Result<()> {
 ///   is printed once, by rank 0, and every rank ends normally.
 /// - Any other error may be one rank's alone while the others wait in a collective call: that
 ///   rank prints it with its rank and aborts the job (`MPI_Abort`), so a run never hangs.
+///
+/// With `output.figure` (and without `--no-figure`), the figure's study runs after the scene,
+/// into `<out>/figure/`, sharing its PETSc.
 fn run_command(
     case: &Path,
     out: Option<PathBuf>,
     quiet: bool,
+    figure: bool,
     program: String,
     petsc_options: Vec<String>,
 ) -> Result<()> {
@@ -195,8 +203,32 @@ fn run_command(
     )?;
     let (rank, size) = (world.rank(), world.size());
     let out_dir = out.unwrap_or_else(|| default_out(&scene.name));
-    match run(&scene, &petsc, &RunOptions { out_dir, quiet }) {
-        Ok(_) => {
+    let figure_dir = out_dir.join("figure");
+    let result = run(&scene, &petsc, &RunOptions { out_dir, quiet }).and_then(|_| {
+        match scene.figure.as_deref().filter(|_| figure) {
+            Some(study) => {
+                if rank == 0 && !quiet {
+                    println!(
+                        "mortar: the scene's figure: {} -> {}",
+                        study.display(),
+                        figure_dir.display()
+                    );
+                }
+                Study::load(study)?
+                    .run(
+                        &petsc,
+                        &RunOptions {
+                            out_dir: figure_dir,
+                            quiet,
+                        },
+                    )
+                    .map(|_| ())
+            }
+            None => Ok(()),
+        }
+    });
+    match result {
+        Ok(()) => {
             if rank == 0 {
                 warn_unused_options(&petsc);
             }

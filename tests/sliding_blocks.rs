@@ -1,10 +1,11 @@
 //! The paper's sliding blocks (section 4.3, Figure 7), in release mode:
 //! `cargo test --release --test sliding_blocks`.
 //!
-//! The study cases/sliding_blocks/study.toml runs the paper's cases 1-4 (Hex27 two passes;
-//! Hex27 one pass with the lower or the upper surface secondary; Hex8 with twice the elements
-//! per side, one pass) through compression, stick and slip, and compares their curves of
-//! vertical force against horizontal displacement with case 1's.
+//! `mortar run` of the scene runs, after it, its figure study cases/sliding_blocks/study.toml
+//! (`output.figure`): the paper's cases 1-6 (Hex27 two passes; Hex27 one pass with the lower or
+//! the upper surface secondary; Hex8 with twice the elements per side, one pass; node-on-segment
+//! on the Hex8 meshes, two passes and one pass) through compression, stick and slip, comparing
+//! their curves of vertical force against horizontal displacement with case 1's.
 //!
 //! Passing:
 //! - every run converges;
@@ -32,17 +33,20 @@ use std::path::Path;
     ignore = "release only: cargo test --release --test sliding_blocks"
 )]
 fn figure_7_cases_agree_and_slip_at_mu() {
-    let study = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/sliding_blocks/study.toml");
-    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("figure7");
-    let _ = std::fs::remove_dir_all(&out);
+    // `mortar run` of the scene runs its figure study (output.figure) into <out>/figure.
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/sliding_blocks/case.toml");
+    let run = Path::new(env!("CARGO_TARGET_TMPDIR")).join("figure7");
+    let _ = std::fs::remove_dir_all(&run);
     let status = common::mortar_command()
-        .arg("study")
-        .arg(&study)
+        .arg("run")
+        .arg(&scene)
         .arg("--out")
-        .arg(&out)
+        .arg(&run)
+        .arg("-q")
         .status()
         .expect("cannot start mortar");
-    assert!(status.success(), "the Figure 7 study failed");
+    assert!(status.success(), "the scene or its Figure 7 study failed");
+    let out = run.join("figure");
     for f in ["curves.png", "curves.svg", "study.csv"] {
         assert!(out.join(f).is_file(), "missing {f}");
     }
@@ -107,7 +111,8 @@ fn newton_converges_quadratically_within_8_iterations() {
     let text = std::fs::read_to_string(&case)
         .unwrap()
         .replace("petsc_options = \"petscrc\"", "")
-        .replace("vtu_every = 5", "vtu_every = 0");
+        .replace("vtu_every = 5", "vtu_every = 0")
+        .replace("figure = \"study.toml\"", "");
     let case = common::write_case("sliding_blocks_newton", &text);
     let (out, stdout) = common::run_case(&case, 1, &["-snes_monitor"]);
     let most = common::metric(&out, "max_newton_its");

@@ -435,6 +435,10 @@ pub struct OutputSpec {
     /// `_y`, `_z` (a beam's tip, say). Default: none.
     #[serde(default)]
     pub track: Vec<String>,
+    /// A study file (path relative to the case file) that `mortar run` runs after the scene,
+    /// into `<out>/figure/`: for a scene whose reference figure compares variants (the sliding
+    /// blocks' Figure 7, six runs). `mortar run --no-figure` skips it. Default: none.
+    pub figure: Option<String>,
 }
 
 impl Default for OutputSpec {
@@ -443,6 +447,7 @@ impl Default for OutputSpec {
             vtu_every: 1,
             reactions: None,
             track: Vec::new(),
+            figure: None,
         }
     }
 }
