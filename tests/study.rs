@@ -360,6 +360,30 @@ set = { "steps.count" = 4 }
     }
 }
 
+/// A variant with `may_fail = true` (a baseline expected to break) fails without failing the
+/// study: exit 0, the run recorded as failed, its curve plotted up to where it stopped.
+#[test]
+fn a_variant_that_may_fail_does_not_fail_the_study() {
+    let crushed = r#"
+[[variant]]
+name = "crushed"
+may_fail = true
+set = { "dirichlet.0.value" = [-2.0], "dirichlet.0.curve" = { kind = "table", table = [[0.0, 0.0], [0.5, 0.05], [1.0, 1.0]] }, "steps.max_cuts" = 0 }
+"#;
+    let dir = block_study_dir(
+        "study_curves_may_fail",
+        &block_study(ONE_REFINEMENT, crushed, ""),
+    );
+    let o = run_study(&dir, &["-q"]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let out = dir.join("out");
+    let rows = csv_rows(&out);
+    assert_eq!(rows[2][6], "false", "{rows:?}");
+    let s = common::summary(&out);
+    assert_eq!(s["metrics"]["failed_runs"].as_f64(), Some(1.0));
+    assert!(curve_diff(&out, "crushed").is_some());
+}
+
 #[test]
 fn curves_of_a_failed_run_hold_its_converged_steps() {
     // "crushed": the first two steps as the others (-0.05, -0.1), then a step to -1.05 that
@@ -385,11 +409,14 @@ set = { "dirichlet.0.value" = [-2.0], "dirichlet.0.curve" = { kind = "table", ta
     assert_eq!(rows[2][6], "false", "{rows:?}");
 
     // Plotted with its two points, compared where it overlaps the reference (-0.05, -0.1):
-    // there it is the reference.
+    // there it is the reference. The legend says where it stopped.
     let svg = std::fs::read_to_string(out.join("curves.svg")).unwrap();
     assert!(out.join("curves.png").is_file());
     if svg.contains("<text") {
-        assert!(svg.contains("\ncrushed\n") && !svg.contains("no points"));
+        assert!(
+            svg.contains("crushed: stopped at -0.100") && !svg.contains("no points"),
+            "{svg}"
+        );
     }
     let s = common::summary(&out);
     assert_eq!(s["converged"], false);
