@@ -218,6 +218,8 @@ pub struct Scene {
     pub petsc_options: Option<PathBuf>,
     /// The study `mortar run` runs after the scene (`output.figure`), resolved.
     pub figure: Option<PathBuf>,
+    /// Checks on the run's metrics (`expect`).
+    pub expectations: Vec<crate::expect::Expectation>,
     pub mesh: Mesh,
     /// Material of each body (index = body).
     pub materials: Vec<Material>,
@@ -539,6 +541,7 @@ impl Scene {
             dir,
             petsc_options,
             figure,
+            expectations: crate::expect::parse_all("expect", &file.expect).map_err(err)?,
             mesh,
             materials,
             curves,

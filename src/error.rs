@@ -43,6 +43,9 @@ pub enum Error {
     #[error("solve: {0}")]
     Solve(String),
     /// An error already reported by another rank (or by this one): exit 1, print nothing.
+    /// Declared expectations (`expect`) that the measured metrics do not meet.
+    #[error("expect: {0}")]
+    Expectation(String),
     #[error("(reported)")]
     Reported,
     /// Anything else with a clear message.
@@ -62,6 +65,7 @@ impl Error {
                 | Error::Gmsh { .. }
                 | Error::Options { .. }
                 | Error::Solve(_)
+                | Error::Expectation(_)
         )
     }
 

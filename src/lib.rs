@@ -16,6 +16,7 @@ pub mod case;
 pub mod contact;
 pub mod dofs;
 pub mod error;
+pub mod expect;
 pub mod fe;
 pub mod io;
 pub mod material;

@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use mpi::collective::{CommunicatorCollectives, SystemOperation};
+use mpi::collective::{CommunicatorCollectives, Root, SystemOperation};
 use mpi::topology::{Communicator, SimpleCommunicator};
 
 use mortar::case::Scene;
@@ -204,7 +204,8 @@ fn run_command(
     let (rank, size) = (world.rank(), world.size());
     let out_dir = out.unwrap_or_else(|| default_out(&scene.name));
     let figure_dir = out_dir.join("figure");
-    let result = run(&scene, &petsc, &RunOptions { out_dir, quiet }).and_then(|_| {
+    let result = run(&scene, &petsc, &RunOptions { out_dir, quiet }).and_then(|summary| {
+        check_expectations(&world, &scene.expectations, &summary.metrics)?;
         match scene.figure.as_deref().filter(|_| figure) {
             Some(study) => {
                 if rank == 0 && !quiet {
@@ -283,13 +284,47 @@ fn study_command(
     )?;
     let (rank, size) = (world.rank(), world.size());
     let out_dir = out.unwrap_or_else(|| default_out(&study.name));
-    let result = study.run(&petsc, &RunOptions { out_dir, quiet });
+    let result = study
+        .run(&petsc, &RunOptions { out_dir, quiet })
+        .and_then(|report| {
+            check_expectations(&world, &study.expectations, &report.summary.metrics)
+        });
     if rank == 0 {
         warn_unused_options(&petsc);
     }
     match result {
         Ok(_) => Ok(()),
         Err(e) => Err(abort_unless_collective(&world, e, rank, size)),
+    }
+}
+
+/// Prints every expectation with its measured values and fails when one does not hold, on
+/// rank 0's metrics (a study's summary lives there); every rank shares the verdict, and only
+/// rank 0 carries the message.
+fn check_expectations(
+    world: &SimpleCommunicator,
+    expectations: &[mortar::expect::Expectation],
+    metrics: &std::collections::BTreeMap<String, f64>,
+) -> Result<()> {
+    if expectations.is_empty() {
+        return Ok(());
+    }
+    let (outcomes, failed) = mortar::expect::check_all(expectations, metrics);
+    let mut verdict = i32::from(failed.is_some());
+    world.process_at_rank(0).broadcast_into(&mut verdict);
+    if world.rank() != 0 {
+        return if verdict == 0 {
+            Ok(())
+        } else {
+            Err(Error::Reported)
+        };
+    }
+    for o in &outcomes {
+        println!("mortar: {o}");
+    }
+    match failed {
+        Some(msg) => Err(Error::Expectation(msg)),
+        None => Ok(()),
     }
 }
 

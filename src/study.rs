@@ -153,6 +153,11 @@ pub struct StudyFile {
     /// Curves of the runs' load histories to plot and compare between variants (see the module
     /// docs). Default: none.
     pub curves: Option<CurvesSpec>,
+    /// Checks on the study's summary metrics (`slope_* >= 1.9`; see `crate::expect`): printed
+    /// with their measured values after the study, which fails when one does not hold.
+    /// Default: none.
+    #[serde(default)]
+    pub expect: Vec<String>,
 }
 
 /// The `[curves]` table: one curve per variant, from the `history.csv` of its run at the last
@@ -239,6 +244,8 @@ pub struct Study {
     pub petsc_options: Option<PathBuf>,
     /// The `[curves]` table, validated.
     pub curves: Option<Curves>,
+    /// Checks on the study's metrics (`expect`).
+    pub expectations: Vec<crate::expect::Expectation>,
 }
 
 /// A validated `[curves]` table ([`CurvesSpec`]), defaults resolved.
@@ -419,6 +426,7 @@ impl Study {
             variants: file.variant,
             petsc_options: None,
             curves: None,
+            expectations: crate::expect::parse_all("expect", &file.expect).map_err(err)?,
         };
         // Every run's scene, built and dropped one at a time.
         let base_scene = Scene::load(&study.case)?;

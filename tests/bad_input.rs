@@ -493,6 +493,11 @@ value = [0.0, 0.0, -1.0]
             "steps.count",
         ),
         check(
+            "expect_without_comparison",
+            text(&format!("expect = [\"max_newton_its 8\"]\n{VALID}")),
+            "expect[0]",
+        ),
+        check(
             "steps_unknown_on_failure",
             valid_plus("[steps]\ncount = 1\non_failure = \"ignore\"\n"),
             "steps.on_failure",

@@ -167,6 +167,39 @@ fn unconverged_steps_are_accepted_and_recorded_on_request() {
         .all(|st| st["converged"] == false));
 }
 
+/// Expectations (`expect`): printed with their measured values; a run whose expectation fails
+/// exits with one error line naming it.
+#[test]
+fn expectations_are_printed_and_enforced() {
+    let base = common::compressed_block("hex8", 0.05, 2);
+    let good = common::write_case(
+        "expect_good",
+        &format!("expect = [\"max_newton_its >= 1\", \"total_newton_its > 0\"]\n{base}"),
+    );
+    let (_, stdout) = common::run_case(&good, 1, &[]);
+    assert_eq!(stdout.matches("-> ok").count(), 2, "{stdout}");
+
+    let bad = common::write_case(
+        "expect_bad",
+        &format!("expect = [\"max_newton_its <= 0\"]\n{base}"),
+    );
+    let out = common::run_raw(&bad, 1, &bad.parent().unwrap().join("out"), &["-q"]);
+    assert!(!out.status.success());
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("expect max_newton_its <= 0: max_newton_its = "),
+        "{stdout}"
+    );
+    assert!(stdout.contains("-> FAILED"), "{stdout}");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(
+        lines,
+        ["mortar: error: expect: 1 of 1 expectation(s) failed: max_newton_its <= 0"],
+        "{stderr}"
+    );
+}
+
 /// `-log_view` shows the solver's phases as PETSc log stages.
 #[test]
 fn phases_are_petsc_log_stages() {

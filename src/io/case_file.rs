@@ -85,6 +85,11 @@ pub struct CaseFile {
     pub output: OutputSpec,
     /// Exact solution the run is measured against (optional).
     pub verification: Option<VerificationSpec>,
+    /// Checks on the run's summary metrics, `"<metric> <op> <number>"` with `op` one of `<=`,
+    /// `>=`, `<`, `>`, `==` and `*` wildcards in the metric (`crate::expect`): `mortar run`
+    /// prints each with its measured value and fails when one does not hold. Default: none.
+    #[serde(default)]
+    pub expect: Vec<String>,
 }
 
 /// One mesh part: a generator or a Gmsh file.
