@@ -94,7 +94,9 @@
 //!   `[curves]`, a `history.csv` left there by an earlier study is removed before the run.
 //! - `study.csv`: one row per run, rewritten after every run: `variant, level, h, error` (the
 //!   metric; empty for a failed run), `seconds` (wall clock), `newton_its` (total over the steps
-//!   that converged), `converged` (`true`/`false`).
+//!   that converged), `converged` (`true`/`false`), `augmentations` (Uzawa, over the steps),
+//!   `peak_memory_mb` (peak resident memory of the run, largest over the ranks: Linux's
+//!   `VmHWM`, reset before each run), `on_front` (see below).
 //! - `summary.json` ([`Summary`]): `case` = the study name (the study file's stem), `converged` =
 //!   every run converged, `metrics`: `slope_<variant>` (least-squares slope of log(error)
 //!   against log(h) over the variant's converged runs, when there are two or more) and
@@ -107,6 +109,13 @@
 //!   refinements.
 //! - With `[curves]`: `curves.png`, `curves.svg`: y against x on linear axes, one line per
 //!   variant (its run at the last level), `title` as the title ([`crate::io::plot::lines`]).
+//! - Without `[curves]` (the metric is an error): `pareto.png`, `pareto.svg`, the metric
+//!   against wall time on log-log axes, every converged run a point, its **Pareto front**
+//!   crossed out: the runs that no other run beats in both (no more time and no larger
+//!   error, one of them strictly; [`pareto_front`]). The summary gets
+//!   `on_front_<variant>_<level>` (1 or 0) and, for the default variant (the first with no
+//!   edits: the case file as it is), `default_on_front`, the share of its runs on the front;
+//!   the closing line says it.
 //!
 //! A failed run (not converged, a bad PETSc option, ...) is recorded (`converged = false`, no
 //! point on the convergence plot) and the study goes on; when any failed, the study returns an
@@ -119,7 +128,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use mpi::collective::Root;
+use mpi::collective::{CommunicatorCollectives, Root, SystemOperation};
 use mpi::topology::Communicator;
 use serde::Deserialize;
 
@@ -279,7 +288,14 @@ pub struct RunRecord {
     pub error: Option<f64>,
     pub seconds: f64,
     pub newton_its: usize,
+    /// Uzawa augmentations over the run's steps.
+    pub augmentations: usize,
+    /// Peak resident memory of the run (largest over the ranks), MB; `None` where Linux's
+    /// `/proc/self` is not there.
+    pub peak_memory_mb: Option<f64>,
     pub converged: bool,
+    /// On the Pareto front of error against wall time (see [`pareto_front`]).
+    pub on_front: bool,
     /// Why the run failed.
     pub message: Option<String>,
 }
@@ -522,6 +538,7 @@ impl Study {
                 if rank == 0 && self.curves.is_some() && stale.exists() {
                     std::fs::remove_file(&stale).map_err(|e| Error::io(&stale, e))?;
                 }
+                reset_peak_memory();
                 let t0 = Instant::now();
                 let result = self.scene(v, level).and_then(|scene| {
                     solver::run(
@@ -534,6 +551,13 @@ impl Study {
                     )
                 });
                 let seconds = t0.elapsed().as_secs_f64();
+                // Every rank takes part (-1: not available there).
+                let local = peak_memory_mb().unwrap_or(-1.0);
+                let mut most = 0.0f64;
+                petsc
+                    .world()
+                    .all_reduce_into(&local, &mut most, SystemOperation::max());
+                let peak_memory_mb = (most >= 0.0).then_some(most);
                 let mut record = RunRecord {
                     variant: variant.name.clone(),
                     level,
@@ -541,7 +565,10 @@ impl Study {
                     error: None,
                     seconds,
                     newton_its: 0,
+                    augmentations: 0,
+                    peak_memory_mb,
                     converged: false,
+                    on_front: false,
                     message: None,
                 };
                 match result {
@@ -563,6 +590,7 @@ impl Study {
                         record.error = Some(e);
                         record.converged = true;
                         record.newton_its = s.steps.iter().map(|st| st.newton_its).sum();
+                        record.augmentations = s.steps.iter().map(|st| st.augmentations).sum();
                     }
                     // Errors every rank meets alike are this run's failure; any other (an I/O
                     // error on one rank) ends the study, as it ends a run.
@@ -586,6 +614,11 @@ impl Study {
                 if !columns_checked {
                     columns_checked = self.check_columns(petsc, &run_dir)?;
                 }
+            }
+        }
+        if self.curves.is_none() {
+            for i in pareto_front(&runs) {
+                runs[i].on_front = true;
             }
         }
         let failed = runs.iter().filter(|r| !r.converged).count();
@@ -622,6 +655,9 @@ impl Study {
                     })
                     .collect();
                 done.push(format!("slopes {}", slopes.join(", ")));
+            }
+            if self.curves.is_none() {
+                done.push(self.write_pareto(&runs, &mut summary, out)?);
             }
             if let Some(curves) = &self.curves {
                 let figures = self.write_curves(curves, out)?;
@@ -726,6 +762,85 @@ impl Study {
                 msg: message,
             }),
         }
+    }
+
+    /// The Pareto front of error against wall time (the flags are set on `runs`): `pareto.png`
+    /// and `.svg` (every converged run a point, one line per variant, the front crossed out),
+    /// `study.csv` rewritten with the flags, the summary's `on_front_<variant>_<level>` and,
+    /// for the default variant (the first without edits: the case file as it is),
+    /// `default_on_front` (the share of its runs on the front). Returns the progress note.
+    fn write_pareto(
+        &self,
+        runs: &[RunRecord],
+        summary: &mut Summary,
+        out: &Path,
+    ) -> Result<String> {
+        let point = |r: &RunRecord| r.error.map(|e| (r.seconds, e.abs()));
+        let series: Vec<plot::Series> = self
+            .variants
+            .iter()
+            .map(|v| {
+                let mine: Vec<&RunRecord> = runs
+                    .iter()
+                    .filter(|r| r.variant == v.name && r.converged)
+                    .collect();
+                plot::Series {
+                    name: v.name.clone(),
+                    points: mine.iter().filter_map(|r| point(r)).collect(),
+                    flagged: mine
+                        .iter()
+                        .filter(|r| r.on_front)
+                        .filter_map(|r| point(r))
+                        .collect(),
+                }
+            })
+            .collect();
+        warn(plot::loglog_points(
+            &out.join("pareto"),
+            &format!(
+                "{}: {} against wall time (x: Pareto front)",
+                self.name, self.metric
+            ),
+            "wall time (s)",
+            &self.metric,
+            &series,
+        )?);
+        write_atomic(&out.join("study.csv"), study_csv(runs).as_bytes())?;
+        for r in runs.iter().filter(|r| r.converged) {
+            summary.metrics.insert(
+                format!("on_front_{}_{}", r.variant, r.level),
+                f64::from(u8::from(r.on_front)),
+            );
+        }
+        let front = runs.iter().filter(|r| r.on_front).count();
+        let mut note = format!(
+            "Pareto front of {} against wall time: {front} run(s)",
+            self.metric
+        );
+        let default = self
+            .variants
+            .iter()
+            .find(|v| v.set.is_empty() && v.refinement_set.is_empty());
+        if let Some(d) = default {
+            let mine: Vec<&RunRecord> = runs
+                .iter()
+                .filter(|r| r.variant == d.name && r.converged)
+                .collect();
+            if !mine.is_empty() {
+                let on = mine.iter().filter(|r| r.on_front).count();
+                summary
+                    .metrics
+                    .insert("default_on_front".into(), on as f64 / mine.len() as f64);
+                let _ = write!(
+                    note,
+                    "; the defaults (variant '{}') have {on} of {} runs on it",
+                    d.name,
+                    mine.len()
+                );
+            }
+        }
+        summary.write(&out.join("summary.json"))?;
+        Ok(note)
     }
 
     /// Reads every variant's curve at the last level, writes `curves.png` and `curves.svg`
@@ -996,17 +1111,70 @@ fn progress_line(metric: &str, r: &RunRecord) -> String {
 
 /// `study.csv` of the runs so far.
 fn study_csv(runs: &[RunRecord]) -> String {
-    let mut out = String::from("variant,level,h,error,seconds,newton_its,converged\n");
+    let mut out = String::from(
+        "variant,level,h,error,seconds,newton_its,converged,augmentations,peak_memory_mb,on_front\n",
+    );
     for r in runs {
         let error = r.error.map(|e| e.to_string()).unwrap_or_default();
+        let memory = r
+            .peak_memory_mb
+            .map(|m| format!("{m:.1}"))
+            .unwrap_or_default();
         // Variant names are restricted to [A-Za-z0-9_-]: no quoting needed.
         let _ = writeln!(
             out,
-            "{},{},{},{error},{},{},{}",
-            r.variant, r.level, r.h, r.seconds, r.newton_its, r.converged
+            "{},{},{},{error},{},{},{},{},{memory},{}",
+            r.variant,
+            r.level,
+            r.h,
+            r.seconds,
+            r.newton_its,
+            r.converged,
+            r.augmentations,
+            r.on_front
         );
     }
     out
+}
+
+/// The runs on the Pareto front of error against wall time: converged runs with a finite
+/// error that no other such run beats in both (no more time and no larger error, one of them
+/// strictly). Indices into `runs`, ascending.
+pub fn pareto_front(runs: &[RunRecord]) -> Vec<usize> {
+    let points: Vec<(usize, f64, f64)> = runs
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.converged)
+        .filter_map(|(i, r)| {
+            r.error
+                .filter(|e| e.is_finite())
+                .map(|e| (i, r.seconds, e.abs()))
+        })
+        .collect();
+    points
+        .iter()
+        .filter(|&&(i, t, e)| {
+            !points
+                .iter()
+                .any(|&(j, tj, ej)| j != i && tj <= t && ej <= e && (tj < t || ej < e))
+        })
+        .map(|p| p.0)
+        .collect()
+}
+
+/// Resets the process's peak resident memory (`VmHWM`), where Linux allows it
+/// (`/proc/self/clear_refs`, value 5); otherwise the peak read after a run is the process's.
+fn reset_peak_memory() {
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+}
+
+/// The process's peak resident memory since the last reset, in MB (`VmHWM` of
+/// `/proc/self/status`).
+fn peak_memory_mb() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb / 1024.0)
 }
 
 /// The edits of one run, in order: the variant's, then the refinement's; each with the study
@@ -1142,6 +1310,33 @@ mod tests {
     use super::*;
 
     #[test]
+    fn pareto_front_keeps_the_runs_nothing_beats() {
+        let run = |variant: &str, seconds: f64, error: Option<f64>, converged: bool| RunRecord {
+            variant: variant.into(),
+            level: 0,
+            h: 1.0,
+            error,
+            seconds,
+            newton_its: 0,
+            augmentations: 0,
+            peak_memory_mb: None,
+            converged,
+            on_front: false,
+            message: None,
+        };
+        let runs = vec![
+            run("fast_coarse", 1.0, Some(1e-2), true),
+            run("slow_fine", 10.0, Some(1e-4), true),
+            run("dominated", 5.0, Some(2e-2), true),
+            run("tie_in_time", 10.0, Some(1e-3), true),
+            run("failed", 0.1, None, false),
+            run("middle", 3.0, Some(-1e-3), true),
+        ];
+        assert_eq!(pareto_front(&runs), vec![0, 1, 5]);
+        assert!(pareto_front(&[]).is_empty());
+    }
+
+    #[test]
     fn smoothness_is_one_for_even_steps_and_flags_a_spike() {
         let even: Vec<(f64, f64)> = (0..10)
             .map(|i| (f64::from(i), 2.0 * f64::from(i)))
@@ -1262,20 +1457,25 @@ count = 1
             error: Some(0.125),
             seconds: 2.5,
             newton_its: 1,
+            augmentations: 2,
+            peak_memory_mb: Some(12.5),
             converged: true,
+            on_front: true,
             message: None,
         };
         let failed = RunRecord {
             error: None,
             converged: false,
+            peak_memory_mb: None,
+            on_front: false,
             message: Some("x".into()),
             ..r.clone()
         };
         assert_eq!(
             study_csv(&[r, failed]),
-            "variant,level,h,error,seconds,newton_its,converged\n\
-             hex8,1,0.5,0.125,2.5,1,true\n\
-             hex8,1,0.5,,2.5,1,false\n"
+            "variant,level,h,error,seconds,newton_its,converged,augmentations,peak_memory_mb,on_front\n\
+             hex8,1,0.5,0.125,2.5,1,true,2,12.5,true\n\
+             hex8,1,0.5,,2.5,1,false,2,,false\n"
         );
     }
 

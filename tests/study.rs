@@ -65,7 +65,7 @@ fn csv_rows(out: &Path) -> Vec<Vec<String>> {
     let mut lines = csv.lines();
     assert_eq!(
         lines.next(),
-        Some("variant,level,h,error,seconds,newton_its,converged")
+        Some("variant,level,h,error,seconds,newton_its,converged,augmentations,peak_memory_mb,on_front")
     );
     lines
         .map(|l| l.split(',').map(str::to_string).collect())
@@ -146,6 +146,36 @@ set = { "mesh.0.element" = "hex20" }
         .map(|r| (r[2].parse().unwrap(), r[3].parse().unwrap()))
         .collect();
     assert!((fitted_slope(&pts) - s8).abs() < 1e-12);
+
+    // The Pareto front of error against wall time: no run on it is beaten in both by another
+    // run, every run off it is; the plot exists; peak memory is recorded.
+    let pts: Vec<(f64, f64, bool)> = rows
+        .iter()
+        .map(|r| (r[4].parse().unwrap(), r[3].parse().unwrap(), r[9] == "true"))
+        .collect();
+    let beaten = |i: usize| {
+        let (t, e, _) = pts[i];
+        pts.iter()
+            .enumerate()
+            .any(|(j, &(tj, ej, _))| j != i && tj <= t && ej <= e && (tj < t || ej < e))
+    };
+    for (i, p) in pts.iter().enumerate() {
+        assert_eq!(p.2, !beaten(i), "run {i}: {rows:?}");
+        assert_eq!(
+            metric(&format!("on_front_{}_{}", rows[i][0], rows[i][1])),
+            f64::from(u8::from(p.2))
+        );
+    }
+    assert!(pts.iter().any(|p| p.2));
+    assert!(
+        rows.iter().all(|r| r[8].parse::<f64>().unwrap() > 1.0),
+        "{rows:?}"
+    );
+    assert!(out.join("pareto.png").is_file() && out.join("pareto.svg").is_file());
+    assert!(
+        stdout.contains("Pareto front of energy_error against wall time"),
+        "{stdout}"
+    );
 }
 
 #[test]

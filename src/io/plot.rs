@@ -45,8 +45,8 @@ pub struct Series {
     /// `(x, y)` points, in drawing order: `(h, error)` in [`loglog`], where both must be positive
     /// and finite to appear; in [`lines`], both must be finite.
     pub points: Vec<(f64, f64)>,
-    /// Points to flag with a black cross on top of the curve (e.g. load steps accepted without
-    /// convergence); [`lines`] only.
+    /// Points to flag with a black cross on top of the curve (load steps accepted without
+    /// convergence, the Pareto front); [`lines`] and [`loglog_points`].
     pub flagged: Vec<(f64, f64)>,
 }
 
@@ -115,6 +115,7 @@ pub fn loglog(
         x_label,
         y_label,
         series,
+        true,
         font().is_some(),
         &mut warnings,
     );
@@ -139,6 +140,30 @@ pub fn lines(
         x_label,
         y_label,
         series,
+        font().is_some(),
+        &mut warnings,
+    );
+    plot.write(stem)?;
+    Ok(warnings)
+}
+
+/// Writes `<stem>.png` and `<stem>.svg`: points on log-log axes, one line per series in the
+/// given order, a legend with the series' names (no slopes), the `flagged` points crossed out
+/// (e.g. the Pareto front of error against wall time). Returns warnings as [`loglog`].
+pub fn loglog_points(
+    stem: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+) -> Result<Vec<String>> {
+    let mut warnings = font_warnings(stem);
+    let plot = Plot::new(
+        title,
+        x_label,
+        y_label,
+        series,
+        false,
         font().is_some(),
         &mut warnings,
     );
@@ -222,12 +247,13 @@ struct Plot<'a, A: Axis> {
 }
 
 impl<'a> Plot<'a, LogAxis> {
-    /// A log-log plot: the legend gives each series' fitted slope.
+    /// A log-log plot: with `slopes`, the legend gives each series' fitted slope.
     fn new(
         title: &'a str,
         x_label: &'a str,
         y_label: &'a str,
         series: &[Series],
+        slopes: bool,
         text: bool,
         warnings: &mut Vec<String>,
     ) -> Plot<'a, LogAxis> {
@@ -237,7 +263,7 @@ impl<'a> Plot<'a, LogAxis> {
                 let slope = fitted_slope(&shown);
                 let entry = match shown.len() {
                     0 => format!("{name}: no points"),
-                    _ if slope.is_finite() => format!("{name}: slope {slope:.2}"),
+                    _ if slopes && slope.is_finite() => format!("{name}: slope {slope:.2}"),
                     _ => name.to_string(),
                 };
                 (entry, shown)
@@ -246,12 +272,17 @@ impl<'a> Plot<'a, LogAxis> {
         let all: Vec<(f64, f64)> = curves.iter().flat_map(|c| c.1.iter().copied()).collect();
         let x = LogAxis::around(all.iter().map(|p| p.0), 0.08, (0.1, 1.0));
         let y = LogAxis::around(all.iter().map(|p| p.1), 0.12, (0.01, 1.0));
+        let flagged = series
+            .iter()
+            .flat_map(|s| s.flagged.iter().copied())
+            .filter(|&(x, y)| LogAxis::shows(x) && LogAxis::shows(y))
+            .collect();
         Plot {
             title,
             x_label,
             y_label,
             curves,
-            flagged: Vec::new(),
+            flagged,
             x,
             y,
             text,
@@ -1076,7 +1107,7 @@ mod tests {
     fn plot_without_font_has_no_text() {
         let dir = scratch("nofont");
         let mut warnings = Vec::new();
-        let plot = Plot::new("T", "h", "e", &sample(), false, &mut warnings);
+        let plot = Plot::new("T", "h", "e", &sample(), true, false, &mut warnings);
         plot.write(&dir.join("c")).unwrap();
         assert!(warnings.is_empty());
         let svg = std::fs::read_to_string(dir.join("c.svg")).unwrap();
