@@ -227,3 +227,67 @@ count = {steps}
 "#
     )
 }
+
+/// A small frictional slide (Hex8, one pass, mu = 0.3): compressed, then the upper block pushed
+/// sideways, with the upper block narrower than the lower one so that its edges slide over the
+/// lower surface.
+pub fn slide_case(steps: usize) -> String {
+    format!(
+        r#"
+[[mesh]]
+body = "low"
+generator = "box"
+element = "hex8"
+divisions = [3, 2, 1]
+lo = [0.0, 0.0, 0.0]
+hi = [1.5, 1.0, 0.5]
+[[mesh]]
+body = "up"
+generator = "box"
+element = "hex8"
+divisions = [2, 2, 1]
+lo = [0.25, 0.1, 0.5]
+hi = [0.95, 0.9, 1.0]
+[[material]]
+body = "low"
+model = "neo_hookean"
+young = 1000.0
+poisson = 0.3
+[[material]]
+body = "up"
+model = "neo_hookean"
+young = 1000.0
+poisson = 0.3
+[[symmetry]]
+set = "low.zmin"
+normal = "z"
+[[symmetry]]
+set = "low.xmin"
+normal = "x"
+[[symmetry]]
+set = "low.ymin"
+normal = "y"
+[[symmetry]]
+set = "up.ymin"
+normal = "y"
+[[dirichlet]]
+set = "up.zmax"
+components = ["z"]
+value = [-0.02]
+curve = {{ kind = "table", table = [[0.0, 0.0], [0.3, 1.0], [1.0, 1.0]] }}
+[[dirichlet]]
+set = "up.zmax"
+components = ["x"]
+value = [0.2]
+curve = {{ kind = "table", table = [[0.0, 0.0], [0.3, 0.0], [1.0, 1.0]] }}
+[[interface]]
+name = "slide"
+kind = "contact"
+secondary = "up.zmin"
+primary = "low.zmax"
+friction = 0.3
+[steps]
+count = {steps}
+"#
+    )
+}
