@@ -498,6 +498,11 @@ value = [0.0, 0.0, -1.0]
             "expect[0]",
         ),
         check(
+            "output_figure_missing",
+            valid_plus("[output]\nfigure = \"no_such_study.toml\"\n"),
+            "output.figure",
+        ),
+        check(
             "steps_unknown_on_failure",
             valid_plus("[steps]\ncount = 1\non_failure = \"ignore\"\n"),
             "steps.on_failure",
