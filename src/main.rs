@@ -186,7 +186,8 @@ fn execute(cli: Cli, program: String) -> Result<()> {
 ///   rank prints it with its rank and aborts the job (`MPI_Abort`), so a run never hangs.
 ///
 /// With `output.figure` (and without `--no-figure`), the figure's study runs after the scene,
-/// into `<out>/figure/`, sharing its PETSc.
+/// into `<out>/figure/`, sharing its PETSc; the scene's expectations are checked after the
+/// scene, the study's after the study.
 fn run_command(
     case: &Path,
     out: Option<PathBuf>,
@@ -215,15 +216,15 @@ fn run_command(
                         figure_dir.display()
                     );
                 }
-                Study::load(study)?
-                    .run(
-                        &petsc,
-                        &RunOptions {
-                            out_dir: figure_dir,
-                            quiet,
-                        },
-                    )
-                    .map(|_| ())
+                let study = Study::load(study)?;
+                let report = study.run(
+                    &petsc,
+                    &RunOptions {
+                        out_dir: figure_dir,
+                        quiet,
+                    },
+                )?;
+                check_expectations(&world, &study.expectations, &report.summary.metrics)
             }
             None => Ok(()),
         }
