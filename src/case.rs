@@ -678,8 +678,14 @@ fn build_interface(
         kinds.sort();
         kinds.dedup();
         for k in kinds {
-            traction_nodes(k, carried_by)
-                .map_err(|e| format!("{key}.{scheme_key} on the {what} side: {e}"))?;
+            traction_nodes(k, carried_by).map_err(|e| match method {
+                ContactMethod::Mortar => format!("{key}.{scheme_key} on the {what} side: {e}"),
+                ContactMethod::NodeOnSegment => format!(
+                    "{key}.method = \"node_on_segment\" on the {what} side: {k:?} faces have \
+                     nodal areas that are not all positive; node-on-segment needs Quad4, Quad9 \
+                     or Tri3 faces"
+                ),
+            })?;
         }
     }
     let contact = kind == InterfaceKind::Contact;

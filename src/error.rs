@@ -42,10 +42,10 @@ pub enum Error {
     /// A physical failure inside a solve (inverted element, NaN, diverged Newton).
     #[error("solve: {0}")]
     Solve(String),
-    /// An error already reported by another rank (or by this one): exit 1, print nothing.
     /// Declared expectations (`expect`) that the measured metrics do not meet.
     #[error("expect: {0}")]
     Expectation(String),
+    /// An error already reported by another rank (or by this one): exit 1, print nothing.
     #[error("(reported)")]
     Reported,
     /// Anything else with a clear message.

@@ -187,7 +187,7 @@ fn execute(cli: Cli, program: String) -> Result<()> {
 ///
 /// With `output.figure` (and without `--no-figure`), the figure's study runs after the scene,
 /// into `<out>/figure/`, sharing its PETSc; the scene's expectations are checked after the
-/// scene, the study's after the study.
+/// scene, the study's after the study, and the study runs whatever the scene's verdict.
 fn run_command(
     case: &Path,
     out: Option<PathBuf>,
@@ -206,8 +206,8 @@ fn run_command(
     let out_dir = out.unwrap_or_else(|| default_out(&scene.name));
     let figure_dir = out_dir.join("figure");
     let result = run(&scene, &petsc, &RunOptions { out_dir, quiet }).and_then(|summary| {
-        check_expectations(&world, &scene.expectations, &summary.metrics)?;
-        match scene.figure.as_deref().filter(|_| figure) {
+        let scene_verdict = check_expectations(&world, &scene.expectations, &summary.metrics);
+        let figure_verdict = match scene.figure.as_deref().filter(|_| figure) {
             Some(study) => {
                 if rank == 0 && !quiet {
                     println!(
@@ -227,7 +227,8 @@ fn run_command(
                 check_expectations(&world, &study.expectations, &report.summary.metrics)
             }
             None => Ok(()),
-        }
+        };
+        scene_verdict.and(figure_verdict)
     });
     match result {
         Ok(()) => {
@@ -314,10 +315,11 @@ fn check_expectations(
     let mut verdict = i32::from(failed.is_some());
     world.process_at_rank(0).broadcast_into(&mut verdict);
     if world.rank() != 0 {
+        // A collective error: `abort_unless_collective` keeps the other ranks quiet.
         return if verdict == 0 {
             Ok(())
         } else {
-            Err(Error::Reported)
+            Err(Error::Expectation(String::new()))
         };
     }
     for o in &outcomes {

@@ -80,7 +80,7 @@
 //! with `y_ref = 0`, are skipped; when none is left there is no metric. A run that failed or
 //! diverged is still plotted with the points it has (its converged steps) and compared over the
 //! overlap; one that failed before its first step has no points. Steps accepted without
-//! convergence (`steps.on_failure = "continue"`: `converged` = 0 in the history) are crossed out
+//! convergence (`steps.on_failure = "continue"`: `converged` = 0 in the history) are ringed
 //! on the plot, and the legend gives their number and, for a run that stopped early, the x
 //! where it stopped. Every variant also gets `smoothness_<variant>`: the largest change of y
 //! between consecutive points with `x > after` over the mean change (about 1-2 for a smooth
@@ -111,7 +111,7 @@
 //!   variant (its run at the last level), `title` as the title ([`crate::io::plot::lines`]).
 //! - Without `[curves]` (the metric is an error): `pareto.png`, `pareto.svg`, the metric
 //!   against wall time on log-log axes, every converged run a point, its **Pareto front**
-//!   crossed out: the runs that no other run beats in both (no more time and no larger
+//!   ringed: the runs that no other run beats in both (no more time and no larger
 //!   error, one of them strictly; [`pareto_front`]). The summary gets
 //!   `on_front_<variant>_<level>` (1 or 0) and, for the default variant (the first with no
 //!   edits: the case file as it is), `default_on_front`, the share of its runs on the front;
@@ -765,7 +765,7 @@ impl Study {
     }
 
     /// The Pareto front of error against wall time (the flags are set on `runs`): `pareto.png`
-    /// and `.svg` (every converged run a point, one line per variant, the front crossed out),
+    /// and `.svg` (every converged run a point, one line per variant, the front ringed),
     /// `study.csv` rewritten with the flags, the summary's `on_front_<variant>_<level>` and,
     /// for the default variant (the first without edits: the case file as it is),
     /// `default_on_front` (the share of its runs on the front). Returns the progress note.
@@ -798,7 +798,7 @@ impl Study {
         warn(plot::loglog_points(
             &out.join("pareto"),
             &format!(
-                "{}: {} against wall time (x: Pareto front)",
+                "{}: {} against wall time (ringed: Pareto front)",
                 self.name, self.metric
             ),
             "wall time (s)",
@@ -844,8 +844,9 @@ impl Study {
     }
 
     /// Reads every variant's curve at the last level, writes `curves.png` and `curves.svg`
-    /// (rank 0), and returns the largest relative difference of every variant but the
-    /// reference to the reference (see the module docs), in variant order.
+    /// (rank 0), and returns, in variant order, the largest relative difference of every
+    /// variant but the reference to the reference and every variant's smoothness figure (see
+    /// the module docs).
     fn write_curves(&self, curves: &Curves, out: &Path) -> Result<CurveFigures> {
         let level = self.refinements.len() - 1;
         let mut series = Vec::with_capacity(self.variants.len());
@@ -976,10 +977,6 @@ impl Curves {
     }
 }
 
-/// The largest `|y_v(x) - y_ref(x)| / |y_ref(x)|` over the `reference` points with `x > after`,
-/// `y_v` the `other` curve linearly interpolated at `x` ([`interpolate`]); reference points
-/// outside the other curve's x range, or with `y_ref = 0`, are skipped. `None` if no point is
-/// compared.
 /// What `[curves]` measures: per variant, the largest relative difference to the reference
 /// (not for the reference itself) and the smoothness figure.
 struct CurveFigures {
@@ -987,7 +984,7 @@ struct CurveFigures {
     smoothness: Vec<(String, Option<f64>)>,
 }
 
-/// The legend entry of a curve: the variant's name, with the number of crossed-out
+/// The legend entry of a curve: the variant's name, with the number of ringed
 /// (unconverged) steps and, for a run that stopped early, the x where it stopped.
 fn curve_legend(
     name: &str,
@@ -997,7 +994,7 @@ fn curve_legend(
 ) -> String {
     let mut notes = Vec::new();
     if !flagged.is_empty() {
-        notes.push(format!("{} unconverged steps (x)", flagged.len()));
+        notes.push(format!("{} unconverged steps (ringed)", flagged.len()));
     }
     if stopped {
         match points.last() {
@@ -1031,6 +1028,10 @@ fn smoothness(points: &[(f64, f64)], after: f64) -> Option<f64> {
     (mean > 0.0).then(|| largest / mean)
 }
 
+/// The largest `|y_v(x) - y_ref(x)| / |y_ref(x)|` over the `reference` points with `x > after`,
+/// `y_v` the `other` curve linearly interpolated at `x` ([`interpolate`]); reference points
+/// outside the other curve's x range, or with `y_ref = 0`, are skipped. `None` if no point is
+/// compared.
 fn max_rel_diff(reference: &[(f64, f64)], other: &[(f64, f64)], after: f64) -> Option<f64> {
     let curve = by_x(other);
     reference
@@ -1363,7 +1364,7 @@ mod tests {
         assert_eq!(curve_legend("a", &[(0.0, 1.0)], &[], false), "a");
         assert_eq!(
             curve_legend("b", &[(0.0, 1.0), (0.25, 2.0)], &[(0.25, 2.0)], true),
-            "b: 1 unconverged steps (x), stopped at 0.250"
+            "b: 1 unconverged steps (ringed), stopped at 0.250"
         );
         assert_eq!(curve_legend("c", &[], &[], true), "c: failed");
     }

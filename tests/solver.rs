@@ -183,21 +183,29 @@ fn expectations_are_printed_and_enforced() {
         "expect_bad",
         &format!("expect = [\"max_newton_its <= 0\"]\n{base}"),
     );
-    let out = common::run_raw(&bad, 1, &bad.parent().unwrap().join("out"), &["-q"]);
-    assert!(!out.status.success());
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        stdout.contains("expect max_newton_its <= 0: max_newton_its = "),
-        "{stdout}"
-    );
-    assert!(stdout.contains("-> FAILED"), "{stdout}");
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
-    assert_eq!(
-        lines,
-        ["mortar: error: expect: 1 of 1 expectation(s) failed: max_newton_its <= 0"],
-        "{stderr}"
-    );
+    // On 1 and on 2 ranks: printed once, one error line, no MPI abort.
+    for ranks in [1, 2] {
+        let out = common::run_raw(&bad, ranks, &bad.parent().unwrap().join("out"), &["-q"]);
+        assert!(!out.status.success());
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        let printed = stdout
+            .matches("expect max_newton_its <= 0: max_newton_its = ")
+            .count();
+        assert_eq!(printed, 1, "{stdout}");
+        assert!(stdout.contains("-> FAILED"), "{stdout}");
+        // (mpirun adds its own banner about the non-zero exit.)
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let ours: Vec<&str> = stderr
+            .lines()
+            .filter(|l| l.starts_with("mortar:"))
+            .collect();
+        assert_eq!(
+            ours,
+            ["mortar: error: expect: 1 of 1 expectation(s) failed: max_newton_its <= 0"],
+            "{ranks} rank(s): {stderr}"
+        );
+        assert!(!stderr.contains("MPI_ABORT"), "{stderr}");
+    }
 }
 
 /// `-log_view` shows the solver's phases as PETSc log stages.

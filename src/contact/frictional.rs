@@ -764,6 +764,11 @@ impl ContactInterfaces {
                             normal_old: f.normal,
                             traction_t_old: f.traction_t,
                         };
+                    } else if f.area == 0.0 {
+                        // No contact (node-on-segment: no face under the node): no tangential
+                        // traction to carry into the next contact.
+                        st.history.lambda_t = [0.0; 3];
+                        st.history.traction_t_old = [0.0; 3];
                     }
                 }
             }

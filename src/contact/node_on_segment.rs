@@ -28,9 +28,9 @@
 //! Forward-mode automatic differentiation (`num_dual`) over the node and the current segment's
 //! nodes: the closest point is found in floats, then one Newton step in dual numbers,
 //! `xi = xi* - H^-1 r(xi*, x)`, `r_a = (x_S(xi) - x_A) . x_S,a`, carries its exact derivative
-//! (`H = dr/dxi`, itself from dual numbers in `xi`). A point clamped onto the face boundary
-//! (the node beyond the segment's edge) is held fixed in the derivative: there the tangent
-//! misses the sliding of the point along the edge. The slip is linear in the old segment's
+//! (`H = dr/dxi`, itself from dual numbers in `xi`). Contact forces come only from points on a
+//! face or its [`EXTENSION`], where this is exact; a point clamped onto the face boundary
+//! would be held fixed (a defensive branch, not reached by `contact::frictional`). The slip is linear in the old segment's
 //! nodes (`N_i(xi')` fixed); the law's derivatives come from `contact::law` and are chained
 //! by hand.
 

@@ -20,7 +20,7 @@
 //!
 //! Every series is a line; its points are marked (circle, triangle, square, ... by series), every
 //! point for a series of at most 30 (`MARKERS`) points, else every k-th so that about 30 are.
-//! In [`lines`], a series' `flagged` points get a black cross on top.
+//! In [`lines`] and [`loglog_points`], a series' `flagged` points get a black ring.
 //! The legend sits in the corner of the plot that hides the least of the curves. In [`loglog`]
 //! it gives every series' least-squares slope of log(error) against log(h) ([`fitted_slope`]),
 //! the observed order of convergence; in [`lines`], the series' names.
@@ -45,8 +45,8 @@ pub struct Series {
     /// `(x, y)` points, in drawing order: `(h, error)` in [`loglog`], where both must be positive
     /// and finite to appear; in [`lines`], both must be finite.
     pub points: Vec<(f64, f64)>,
-    /// Points to flag with a black cross on top of the curve (load steps accepted without
-    /// convergence, the Pareto front); [`lines`] and [`loglog_points`].
+    /// Points to flag with a black ring (load steps accepted without convergence, the Pareto
+    /// front); [`lines`] and [`loglog_points`].
     pub flagged: Vec<(f64, f64)>,
 }
 
@@ -148,8 +148,8 @@ pub fn lines(
 }
 
 /// Writes `<stem>.png` and `<stem>.svg`: points on log-log axes, one line per series in the
-/// given order, a legend with the series' names (no slopes), the `flagged` points crossed out
-/// (e.g. the Pareto front of error against wall time). Returns warnings as [`loglog`].
+/// given order, a legend with the series' names (no slopes), the `flagged` points ringed (e.g.
+/// the Pareto front of error against wall time). Returns warnings as [`loglog`].
 pub fn loglog_points(
     stem: &Path,
     title: &str,
@@ -468,7 +468,7 @@ impl<A: Axis> Plot<'_, A> {
             }
         }
         for p in &self.flagged {
-            cross(root, chart.backend_coord(p)).map_err(e)?;
+            ring(root, chart.backend_coord(p)).map_err(e)?;
         }
         if self.text && !self.curves.is_empty() {
             let pixels: Vec<Vec<(i32, i32)>> = self
@@ -579,21 +579,13 @@ fn legend_corner(
     best
 }
 
-/// A black cross (a flagged point) at pixel `at`.
-fn cross<DB: DrawingBackend>(
+/// A black ring around a flagged point at pixel `at` (larger than any series marker, and
+/// unlike them not filled).
+fn ring<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
-    (x, y): (i32, i32),
+    at: (i32, i32),
 ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
-    const S: i32 = 7;
-    let style = BLACK.stroke_width(2);
-    root.draw(&PathElement::new(
-        vec![(x - S, y - S), (x + S, y + S)],
-        style,
-    ))?;
-    root.draw(&PathElement::new(
-        vec![(x - S, y + S), (x + S, y - S)],
-        style,
-    ))
+    root.draw(&Circle::new(at, 10, BLACK.stroke_width(2)))
 }
 
 /// Marker `shape` (circle, triangle, square, diamond, cross, by series) at pixel `at`.

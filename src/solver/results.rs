@@ -7,7 +7,8 @@
 //!   volume-averaged), `von_mises`, `rank`. In ParaView: open the PVD, then Warp By Vector.
 //! - `<case>_<step>.pvtu`: joins the pieces of a step; `<case>.pvd`: the time series (time = load
 //!   factor), rewritten after each step.
-//! - `history.csv`: one row per converged step (see [`Results::push_history`]).
+//! - `history.csv`: one row per converged step, and per step accepted without convergence under
+//!   `steps.on_failure = "continue"` (`converged` = 0; see [`Results::push_history`]).
 //! - `displacement.csv`: every node's reference position and displacement at the last converged
 //!   step (`node,x,y,z,ux,uy,uz`).
 //! - `summary.json`: see `io::output::Summary`.
