@@ -157,6 +157,18 @@ pub enum ContactMethod {
     NodeOnSegment,
 }
 
+impl ContactMethod {
+    /// The traction functions whose nodes carry the forces: the interface's `scheme` for
+    /// mortar; for node-on-segment every node of the secondary faces with its share of the
+    /// area, i.e. the faces' own shape functions (scheme 1).
+    pub fn carrier_scheme(self, scheme: TractionScheme) -> TractionScheme {
+        match self {
+            ContactMethod::Mortar => scheme,
+            ContactMethod::NodeOnSegment => TractionScheme::FaceShape,
+        }
+    }
+}
+
 /// A validated interface between two face sets.
 #[derive(Clone, Debug)]
 pub struct Interface {
@@ -658,12 +670,7 @@ fn build_interface(
             ))
         }
     };
-    // Node-on-segment carries a force at every node of the secondary faces, with the node's
-    // share of the area: the faces' own shape functions (scheme 1).
-    let (scheme_key, carried_by) = match method {
-        ContactMethod::Mortar => ("scheme", scheme),
-        ContactMethod::NodeOnSegment => ("method", TractionScheme::FaceShape),
-    };
+    let carried_by = method.carrier_scheme(scheme);
     if !matches!(spec.passes, 1 | 2) {
         return Err(format!("{key}.passes = {}: must be 1 or 2", spec.passes));
     }
@@ -679,7 +686,7 @@ fn build_interface(
         kinds.dedup();
         for k in kinds {
             traction_nodes(k, carried_by).map_err(|e| match method {
-                ContactMethod::Mortar => format!("{key}.{scheme_key} on the {what} side: {e}"),
+                ContactMethod::Mortar => format!("{key}.scheme on the {what} side: {e}"),
                 ContactMethod::NodeOnSegment => format!(
                     "{key}.method = \"node_on_segment\" on the {what} side: {k:?} faces have \
                      nodal areas that are not all positive; node-on-segment needs Quad4, Quad9 \

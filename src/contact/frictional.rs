@@ -858,11 +858,7 @@ impl ContactPass {
         };
         let sec_faces = data(sec);
         let pri_faces = data(pri);
-        // Node-on-segment: every node of the secondary faces, with its share of the area.
-        let carrier_scheme = match iface.method {
-            ContactMethod::Mortar => iface.scheme,
-            ContactMethod::NodeOnSegment => TractionScheme::FaceShape,
-        };
+        let carrier_scheme = iface.method.carrier_scheme(iface.scheme);
         let mut nodes: Vec<usize> = Vec::new();
         let mut local_carriers: Vec<Vec<usize>> = Vec::new();
         for f in &sec_faces {
@@ -1253,7 +1249,7 @@ impl ContactPass {
             };
             friction_traction(&st.history, &law, nu, p, dsh)
         } else {
-            no_friction(p)
+            FrictionResult::frictionless(p)
         };
         let t: [f64; 3] = std::array::from_fn(|c| p * nu[c] + fr.traction[c]);
         fields = NodeFields {
@@ -1531,20 +1527,6 @@ impl Slots {
             force: self.force,
             tangent: self.tangent,
         }
-    }
-}
-
-/// The frictionless result: no tangential traction (`Slip` when pressed, as the law reports
-/// `mu = 0`).
-fn no_friction(p: f64) -> FrictionResult {
-    FrictionResult {
-        traction: [0.0; 3],
-        status: if p > 0.0 { Status::Slip } else { Status::Open },
-        trial: [0.0; 3],
-        d_dsh: [[0.0; 3]; 3],
-        d_p: [0.0; 3],
-        d_nu: [[0.0; 3]; 3],
-        history_dropped: false,
     }
 }
 

@@ -168,8 +168,14 @@ pub struct FrictionResult {
 }
 
 impl FrictionResult {
+    /// The frictionless result at pressure `p`: no tangential traction, [`Status::Slip`] when
+    /// pressed (as the law reports `mu = 0`), [`Status::Open`] otherwise.
+    pub(crate) fn frictionless(p: f64) -> FrictionResult {
+        FrictionResult::zero(if p > 0.0 { Status::Slip } else { Status::Open })
+    }
+
     /// No traction, no derivatives, with `status`.
-    pub(crate) fn zero(status: Status) -> FrictionResult {
+    fn zero(status: Status) -> FrictionResult {
         FrictionResult {
             traction: [0.0; 3],
             status,

@@ -37,7 +37,7 @@
 use num_dual::DualSVec64;
 
 use crate::contact::law::{
-    friction_traction, normal_pressure_touching, FrictionResult, LawParams, NodeHistory, Status,
+    friction_traction, normal_pressure_touching, FrictionResult, LawParams, NodeHistory,
 };
 use crate::fe::shape::{face_normal_at, face_point_at, face_tangents_at, Scalar};
 use crate::fe::FaceType;
@@ -263,7 +263,7 @@ pub fn node_contribution(
         };
         friction_traction(law.history, &prm, nu_re, p, slip)
     } else {
-        FrictionResult::zero(if p > 0.0 { Status::Slip } else { Status::Open })
+        FrictionResult::frictionless(p)
     };
     let t: [f64; 3] = std::array::from_fn(|c| p * nu_re[c] + friction.traction[c]);
     let n_re: Vec<f64> = shape.iter().map(|v| v.re).collect();
@@ -414,6 +414,7 @@ fn node_tangent(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::contact::law::Status;
 
     fn quad(z: f64) -> Vec<[f64; 3]> {
         vec![

@@ -109,18 +109,7 @@ pub fn loglog(
     y_label: &str,
     series: &[Series],
 ) -> Result<Vec<String>> {
-    let mut warnings = font_warnings(stem);
-    let plot = Plot::new(
-        title,
-        x_label,
-        y_label,
-        series,
-        true,
-        font().is_some(),
-        &mut warnings,
-    );
-    plot.write(stem)?;
-    Ok(warnings)
+    write_loglog(stem, title, x_label, y_label, series, true)
 }
 
 /// Writes `<stem>.png` and `<stem>.svg`: linear axes around the data (values of any sign), one
@@ -157,13 +146,25 @@ pub fn loglog_points(
     y_label: &str,
     series: &[Series],
 ) -> Result<Vec<String>> {
+    write_loglog(stem, title, x_label, y_label, series, false)
+}
+
+/// [`loglog`] (`slopes`: the fitted slopes in the legend) and [`loglog_points`].
+fn write_loglog(
+    stem: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+    slopes: bool,
+) -> Result<Vec<String>> {
     let mut warnings = font_warnings(stem);
     let plot = Plot::new(
         title,
         x_label,
         y_label,
         series,
-        false,
+        slopes,
         font().is_some(),
         &mut warnings,
     );
