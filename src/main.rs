@@ -256,9 +256,10 @@ fn start<T>(
     let first_failure = first_failing_rank(&world, loaded.is_err());
     let input = match loaded {
         Ok(s) if first_failure == size => s,
-        Ok(_) => return Err(Error::Reported),
-        Err(e) if rank == first_failure => return Err(ranked(e, rank, size)),
-        Err(_) => return Err(Error::Reported),
+        Err(e) if rank == first_failure => {
+            return Err(report_once(&world, Some(ranked(e, rank, size))))
+        }
+        _ => return Err(report_once(&world, None)),
     };
     let mut petsc_args = vec![program];
     petsc_args.extend(petsc_options);
@@ -339,17 +340,28 @@ fn first_failing_rank(world: &SimpleCommunicator, failed: bool) -> i32 {
     first
 }
 
-/// A collective error is returned for rank 0 to print (others stay quiet); any other error is
-/// printed with its rank and the job is aborted.
+/// A collective error is printed by rank 0 (others stay quiet); any other error is printed with
+/// its rank and the job is aborted.
 fn abort_unless_collective(world: &SimpleCommunicator, e: Error, rank: i32, size: i32) -> Error {
-    if e.is_collective() {
-        return if rank == 0 { e } else { Error::Reported };
-    }
     if size == 1 {
         return e;
     }
+    if e.is_collective() {
+        return report_once(world, (rank == 0).then_some(e));
+    }
     eprintln!("mortar: error: [rank {rank}] {e}");
     world.abort(1)
+}
+
+/// An error every rank has agreed on, printed by the one rank that holds it, before any rank
+/// exits: all ranks wait for the print (a barrier), because mpirun kills the job as soon as one
+/// rank exits non-zero and would otherwise lose the line of a slower rank.
+fn report_once(world: &SimpleCommunicator, message: Option<Error>) -> Error {
+    if let Some(e) = message {
+        eprintln!("mortar: error: {e}");
+    }
+    world.barrier();
+    Error::Reported
 }
 
 /// Prefixes the rank to an error when the job has several.
