@@ -234,6 +234,16 @@ pub struct VariantSpec {
     /// the study fail. Default false.
     #[serde(default)]
     pub may_fail: bool,
+    /// PETSc options of this variant's runs, written as on the command line
+    /// (`"-ksp_type gmres -pc_type gamg"`): put into PETSc's options database for its runs
+    /// only, over the options file and the command line, and restored after each run.
+    /// Default: none.
+    pub petsc: Option<String>,
+    /// Runs this variant on the first `ranks` ranks of the study's job only (from 1 to the
+    /// number of ranks the study runs on; the other ranks wait), so that one study measures
+    /// the speedup: `mpirun -n 2 mortar study` with variants `ranks = 1` and `ranks = 2`.
+    /// Default: every rank of the job.
+    pub ranks: Option<usize>,
 }
 
 /// A validated study.
@@ -249,6 +259,8 @@ pub struct Study {
     pub title: String,
     pub refinements: Vec<RefinementSpec>,
     pub variants: Vec<VariantSpec>,
+    /// Each variant's own PETSc options (`VariantSpec::petsc`), parsed: names and values.
+    pub variant_options: Vec<Vec<(String, Option<String>)>>,
     /// The PETSc options file of the base case (shared by every run).
     pub petsc_options: Option<PathBuf>,
     /// The `[curves]` table, validated.
@@ -284,6 +296,8 @@ pub struct RunRecord {
     pub variant: String,
     pub level: usize,
     pub h: f64,
+    /// The ranks the run ran on.
+    pub ranks: usize,
     /// The metric, for a converged run.
     pub error: Option<f64>,
     pub seconds: f64,
@@ -365,6 +379,9 @@ impl Study {
                     v.name
                 )));
             }
+            if v.ranks == Some(0) {
+                return Err(err(format!("variant[{i}].ranks = 0: at least 1")));
+            }
             if !names.insert(v.name.as_str()) {
                 return Err(err(format!(
                     "variant[{i}].name = \"{}\" is used twice",
@@ -432,8 +449,18 @@ impl Study {
             }
         }
 
+        let variant_options = file
+            .variant
+            .iter()
+            .enumerate()
+            .map(|(i, v)| {
+                crate::petsc::options::parse(v.petsc.as_deref().unwrap_or(""))
+                    .map_err(|m| err(format!("variant[{i}].petsc = \"{}\": {m}", v.petsc.as_deref().unwrap_or(""))))
+            })
+            .collect::<Result<Vec<_>>>()?;
         let mut study = Study {
             name,
+            variant_options,
             file: path.to_path_buf(),
             case,
             metric: file.metric.clone(),
@@ -517,6 +544,23 @@ impl Study {
         }
         let started = Instant::now();
         let total = self.variants.len() * self.refinements.len();
+        let job_size = petsc.size();
+        if let Some((i, v)) = self
+            .variants
+            .iter()
+            .enumerate()
+            .find(|(_, v)| v.ranks.is_some_and(|r| r > job_size))
+        {
+            return Err(Error::Case {
+                file: self.file.clone(),
+                msg: format!(
+                    "variant[{i}].ranks = {}: the study runs on {job_size} rank(s) (mpirun -n {} \
+                     mortar study ...)",
+                    v.ranks.unwrap_or(0),
+                    v.ranks.unwrap_or(0)
+                ),
+            });
+        }
         say(format!(
             "mortar study {}: {} variant(s) x {} refinement(s) = {total} runs of {} on {} \
              rank(s) -> {}",
@@ -539,18 +583,24 @@ impl Study {
                     std::fs::remove_file(&stale).map_err(|e| Error::io(&stale, e))?;
                 }
                 reset_peak_memory();
+                let ranks = variant.ranks.unwrap_or(job_size);
+                let options = crate::petsc::options::Override::set(&self.variant_options[v])?;
                 let t0 = Instant::now();
-                let result = self.scene(v, level).and_then(|scene| {
-                    solver::run(
-                        &scene,
-                        petsc,
-                        &RunOptions {
-                            out_dir: run_dir.clone(),
-                            quiet: true,
-                        },
-                    )
+                // `None` on the ranks that wait while the variant runs on fewer.
+                let result = petsc.on_first_ranks(ranks, || {
+                    self.scene(v, level).and_then(|scene| {
+                        solver::run(
+                            &scene,
+                            petsc,
+                            &RunOptions {
+                                out_dir: run_dir.clone(),
+                                quiet: true,
+                            },
+                        )
+                    })
                 });
                 let seconds = t0.elapsed().as_secs_f64();
+                drop(options);
                 // Every rank takes part (-1: not available there).
                 let local = peak_memory_mb().unwrap_or(-1.0);
                 let mut most = 0.0f64;
@@ -562,6 +612,7 @@ impl Study {
                     variant: variant.name.clone(),
                     level,
                     h: refinement.h,
+                    ranks,
                     error: None,
                     seconds,
                     newton_its: 0,
@@ -572,11 +623,12 @@ impl Study {
                     message: None,
                 };
                 match result {
-                    Ok(s) if !s.converged => {
+                    None => {}
+                    Some(Ok(s)) if !s.converged => {
                         record.newton_its = s.steps.iter().map(|st| st.newton_its).sum();
                         record.message = s.message.clone();
                     }
-                    Ok(s) => {
+                    Some(Ok(s)) => {
                         let Some(&e) = s.metrics.get(&self.metric) else {
                             return Err(Error::Case {
                                 file: self.file.clone(),
@@ -594,7 +646,7 @@ impl Study {
                     }
                     // Errors every rank meets alike are this run's failure; any other (an I/O
                     // error on one rank) ends the study, as it ends a run.
-                    Err(e) if e.is_collective() => {
+                    Some(Err(e)) if e.is_collective() => {
                         if rank == 0 {
                             record.newton_its = Summary::read(&run_dir.join("summary.json"))
                                 .map(|s| s.steps.iter().map(|st| st.newton_its).sum())
@@ -602,8 +654,9 @@ impl Study {
                         }
                         record.message = Some(e.to_string());
                     }
-                    Err(e) => return Err(e),
+                    Some(Err(e)) => return Err(e),
                 }
+                share_record(petsc, &mut record);
                 say(progress_line(&self.metric, &record));
                 runs.push(record);
                 if rank == 0 {
@@ -820,7 +873,12 @@ impl Study {
         let default = self
             .variants
             .iter()
-            .find(|v| v.set.is_empty() && v.refinement_set.is_empty());
+            .find(|v| {
+                v.set.is_empty()
+                    && v.refinement_set.is_empty()
+                    && v.petsc.is_none()
+                    && v.ranks.is_none()
+            });
         if let Some(d) = default {
             let mine: Vec<&RunRecord> = runs
                 .iter()
@@ -1110,10 +1168,33 @@ fn progress_line(metric: &str, r: &RunRecord) -> String {
     )
 }
 
+/// Gives every rank rank 0's figures of a run (rank 0 runs every variant; the others may have
+/// waited, and their clocks differ), so that all ranks agree on the study's outcome. The
+/// failure message stays on rank 0, which prints it.
+fn share_record(petsc: &Petsc, r: &mut RunRecord) {
+    let mut figures = [
+        r.error.unwrap_or(f64::NAN),
+        r.seconds,
+        r.newton_its as f64,
+        r.augmentations as f64,
+        f64::from(u8::from(r.converged)),
+    ];
+    petsc
+        .world()
+        .process_at_rank(0)
+        .broadcast_into(&mut figures[..]);
+    r.error = (!figures[0].is_nan()).then_some(figures[0]);
+    r.seconds = figures[1];
+    r.newton_its = figures[2] as usize;
+    r.augmentations = figures[3] as usize;
+    r.converged = figures[4] != 0.0;
+}
+
 /// `study.csv` of the runs so far.
 fn study_csv(runs: &[RunRecord]) -> String {
     let mut out = String::from(
-        "variant,level,h,error,seconds,newton_its,converged,augmentations,peak_memory_mb,on_front\n",
+        "variant,level,h,ranks,error,seconds,newton_its,converged,augmentations,peak_memory_mb,\
+         on_front\n",
     );
     for r in runs {
         let error = r.error.map(|e| e.to_string()).unwrap_or_default();
@@ -1124,10 +1205,11 @@ fn study_csv(runs: &[RunRecord]) -> String {
         // Variant names are restricted to [A-Za-z0-9_-]: no quoting needed.
         let _ = writeln!(
             out,
-            "{},{},{},{error},{},{},{},{},{memory},{}",
+            "{},{},{},{},{error},{},{},{},{},{memory},{}",
             r.variant,
             r.level,
             r.h,
+            r.ranks,
             r.seconds,
             r.newton_its,
             r.converged,
@@ -1316,6 +1398,7 @@ mod tests {
             variant: variant.into(),
             level: 0,
             h: 1.0,
+            ranks: 1,
             error,
             seconds,
             newton_its: 0,
@@ -1455,6 +1538,7 @@ count = 1
             variant: "hex8".into(),
             level: 1,
             h: 0.5,
+            ranks: 2,
             error: Some(0.125),
             seconds: 2.5,
             newton_its: 1,
@@ -1474,9 +1558,10 @@ count = 1
         };
         assert_eq!(
             study_csv(&[r, failed]),
-            "variant,level,h,error,seconds,newton_its,converged,augmentations,peak_memory_mb,on_front\n\
-             hex8,1,0.5,0.125,2.5,1,true,2,12.5,true\n\
-             hex8,1,0.5,,2.5,1,false,2,,false\n"
+            "variant,level,h,ranks,error,seconds,newton_its,converged,augmentations,\
+             peak_memory_mb,on_front\n\
+             hex8,1,0.5,2,0.125,2.5,1,true,2,12.5,true\n\
+             hex8,1,0.5,2,,2.5,1,false,2,,false\n"
         );
     }
 

@@ -4,6 +4,7 @@
 
 mod common;
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -59,16 +60,25 @@ set = {{ "mesh.0.n_circ" = 3, "mesh.0.n_rad" = 3 }}
     )
 }
 
-/// study.csv as rows of fields (header skipped).
-fn csv_rows(out: &Path) -> Vec<Vec<String>> {
+/// study.csv as rows, each a map from column name to field; the header is checked.
+fn csv_rows(out: &Path) -> Vec<BTreeMap<String, String>> {
     let csv = std::fs::read_to_string(out.join("study.csv")).unwrap();
     let mut lines = csv.lines();
+    let header = lines.next().unwrap();
     assert_eq!(
-        lines.next(),
-        Some("variant,level,h,error,seconds,newton_its,converged,augmentations,peak_memory_mb,on_front")
+        header,
+        "variant,level,h,ranks,error,seconds,newton_its,converged,augmentations,peak_memory_mb,\
+         on_front"
     );
+    let names: Vec<&str> = header.split(',').collect();
     lines
-        .map(|l| l.split(',').map(str::to_string).collect())
+        .map(|l| {
+            names
+                .iter()
+                .map(|n| n.to_string())
+                .zip(l.split(',').map(str::to_string))
+                .collect()
+        })
         .collect()
 }
 
@@ -112,9 +122,9 @@ set = { "mesh.0.element" = "hex20" }
         rows.iter()
             .zip([("hex8", "0"), ("hex8", "1"), ("hex20", "0"), ("hex20", "1")])
     {
-        assert_eq!((row[0].as_str(), row[1].as_str()), (variant, level));
-        assert!(row[3].parse::<f64>().unwrap() > 0.0, "{row:?}");
-        assert_eq!(row[6], "true");
+        assert_eq!((row["variant"].as_str(), row["level"].as_str()), (variant, level));
+        assert!(row["error"].parse::<f64>().unwrap() > 0.0, "{row:?}");
+        assert_eq!(row["converged"], "true");
     }
     for (v, l) in [("hex8", 0), ("hex8", 1), ("hex20", 0), ("hex20", 1)] {
         let run = out.join(format!("runs/{v}/{l}"));
@@ -139,11 +149,11 @@ set = { "mesh.0.element" = "hex20" }
     eprintln!("slopes: hex8 {s8:.3}, hex20 {s20:.3}");
     assert!(s20 > s8 && s8 > 0.5, "hex8 {s8}, hex20 {s20}");
     let e = metric("error_hex20_1");
-    assert_eq!(e, rows[3][3].parse::<f64>().unwrap());
+    assert_eq!(e, rows[3]["error"].parse::<f64>().unwrap());
     // The slope is the one of the table's points.
     let pts: Vec<(f64, f64)> = rows[..2]
         .iter()
-        .map(|r| (r[2].parse().unwrap(), r[3].parse().unwrap()))
+        .map(|r| (r["h"].parse().unwrap(), r["error"].parse().unwrap()))
         .collect();
     assert!((fitted_slope(&pts) - s8).abs() < 1e-12);
 
@@ -151,7 +161,7 @@ set = { "mesh.0.element" = "hex20" }
     // run, every run off it is; the plot exists; peak memory is recorded.
     let pts: Vec<(f64, f64, bool)> = rows
         .iter()
-        .map(|r| (r[4].parse().unwrap(), r[3].parse().unwrap(), r[9] == "true"))
+        .map(|r| (r["seconds"].parse().unwrap(), r["error"].parse().unwrap(), r["on_front"] == "true"))
         .collect();
     let beaten = |i: usize| {
         let (t, e, _) = pts[i];
@@ -162,13 +172,13 @@ set = { "mesh.0.element" = "hex20" }
     for (i, p) in pts.iter().enumerate() {
         assert_eq!(p.2, !beaten(i), "run {i}: {rows:?}");
         assert_eq!(
-            metric(&format!("on_front_{}_{}", rows[i][0], rows[i][1])),
+            metric(&format!("on_front_{}_{}", rows[i]["variant"], rows[i]["level"])),
             f64::from(u8::from(p.2))
         );
     }
     assert!(pts.iter().any(|p| p.2));
     assert!(
-        rows.iter().all(|r| r[8].parse::<f64>().unwrap() > 1.0),
+        rows.iter().all(|r| r["peak_memory_mb"].parse::<f64>().unwrap() > 1.0),
         "{rows:?}"
     );
     assert!(out.join("pareto.png").is_file() && out.join("pareto.svg").is_file());
@@ -253,9 +263,9 @@ set = { "mesh.0.element" = "hex8" }
     let rows = csv_rows(&out);
     assert_eq!(rows.len(), 4, "{rows:?}");
     for r in &rows {
-        let stuck = r[0] == "stuck";
-        assert_eq!(r[6], if stuck { "false" } else { "true" }, "{r:?}");
-        assert_eq!(r[3].is_empty(), stuck, "{r:?}");
+        let stuck = r["variant"] == "stuck";
+        assert_eq!(r["converged"], if stuck { "false" } else { "true" }, "{r:?}");
+        assert_eq!(r["error"].is_empty(), stuck, "{r:?}");
     }
     let s = common::summary(&out);
     assert_eq!(s["converged"], false);
@@ -408,7 +418,7 @@ set = { "dirichlet.0.value" = [-2.0], "dirichlet.0.curve" = { kind = "table", ta
     assert!(o.status.success(), "{}", text(&o.stderr));
     let out = dir.join("out");
     let rows = csv_rows(&out);
-    assert_eq!(rows[2][6], "false", "{rows:?}");
+    assert_eq!(rows[2]["converged"], "false", "{rows:?}");
     let s = common::summary(&out);
     assert_eq!(s["metrics"]["failed_runs"].as_f64(), Some(1.0));
     assert!(curve_diff(&out, "crushed").is_some());
@@ -436,7 +446,7 @@ set = { "dirichlet.0.value" = [-2.0], "dirichlet.0.curve" = { kind = "table", ta
     let out = dir.join("out");
     let rows = csv_rows(&out);
     assert_eq!(rows.len(), 3);
-    assert_eq!(rows[2][6], "false", "{rows:?}");
+    assert_eq!(rows[2]["converged"], "false", "{rows:?}");
 
     // Plotted with its two points, compared where it overlaps the reference (-0.05, -0.1):
     // there it is the reference. The legend says where it stopped.
@@ -525,4 +535,63 @@ fn one_refinement_needs_curves_and_curves_keys_are_checked() {
         &block_study(ONE_REFINEMENT, "", "after = nan"),
         &["curves.after"],
     );
+}
+
+/// The knobs a study sweeps besides the case's keys, on a 2-rank job: a variant on 1 rank
+/// (`ranks = 1`) gives the 2-rank run's error to 1e-10 relative; a variant's PETSc options
+/// reach its runs only (an impossible `-ksp_type` fails that variant's runs, and the variants
+/// after it run as before); a converging iterative solver gives the direct solve's error.
+#[test]
+fn variants_sweep_ranks_and_petsc_options() {
+    let dir = study_dir(
+        "study_ranks_options",
+        &small_study(
+            r#"
+[[variant]]
+name = "two_ranks"
+
+[[variant]]
+name = "one_rank"
+ranks = 1
+
+[[variant]]
+name = "bogus_solver"
+petsc = "-ksp_type no_such_solver"
+may_fail = true
+
+[[variant]]
+name = "gmres"
+petsc = "-ksp_type gmres -pc_type jacobi -ksp_rtol 1e-13 -ksp_max_it 5000"
+"#,
+        ),
+    );
+    let out = dir.join("out");
+    let o = common::run_subcommand("study", &dir.join("study.toml"), 2, &out, &[]);
+    let stdout = text(&o.stdout);
+    assert!(o.status.success(), "{stdout}\n{}", text(&o.stderr));
+    let rows = csv_rows(&out);
+    assert_eq!(rows.len(), 8, "{rows:?}");
+    let row = |v: &str, level: &str| {
+        rows.iter()
+            .find(|r| r["variant"] == v && r["level"] == level)
+            .unwrap_or_else(|| panic!("no {v} {level} in {rows:?}"))
+    };
+    for level in ["0", "1"] {
+        let error = |v: &str| row(v, level)["error"].parse::<f64>().unwrap();
+        assert_eq!(row("two_ranks", level)["ranks"], "2");
+        assert_eq!(row("one_rank", level)["ranks"], "1");
+        let (two, one, gmres) = (error("two_ranks"), error("one_rank"), error("gmres"));
+        assert!((one - two).abs() <= 1e-10 * two, "{one} vs {two}");
+        assert!((gmres - two).abs() <= 1e-6 * two, "{gmres} vs {two}");
+        let bogus = row("bogus_solver", level);
+        assert_eq!(bogus["converged"], "false", "{bogus:?}");
+        assert!(bogus["error"].is_empty());
+    }
+    let s = common::summary(&out);
+    assert!(
+        s["message"].as_str().unwrap().contains("no_such_solver"),
+        "{s}"
+    );
+    // The first variant has no edits: it is the study's defaults.
+    assert!(s["metrics"]["default_on_front"].as_f64().is_some(), "{s}");
 }

@@ -4,7 +4,12 @@ use std::ffi::CString;
 use std::os::raw::c_char;
 use std::path::Path;
 
-use mpi::topology::Communicator;
+use std::cell::RefCell;
+use std::rc::Rc;
+
+use mpi::collective::CommunicatorCollectives;
+use mpi::raw::AsRaw;
+use mpi::topology::{Color, Communicator, SimpleCommunicator};
 use petsc_ffi as p;
 
 use super::chk;
@@ -16,6 +21,8 @@ pub struct Petsc {
     _args: Vec<CString>,
     _argv: Vec<*mut c_char>,
     universe: mpi::environment::Universe,
+    /// The ranks of a run on fewer ranks than the job ([`Petsc::on_first_ranks`]).
+    scope: RefCell<Option<Rc<SimpleCommunicator>>>,
 }
 
 /// Initializes MPI (once per process).
@@ -88,12 +95,53 @@ impl Petsc {
             _args: c_args,
             _argv: argv,
             universe,
+            scope: RefCell::new(None),
         })
     }
 
-    /// The world communicator of rsmpi.
-    pub fn world(&self) -> mpi::topology::SimpleCommunicator {
-        self.universe.world()
+    /// The ranks of the current run: every rank of the job, or inside
+    /// [`Petsc::on_first_ranks`] the ranks running.
+    pub fn world(&self) -> Rc<SimpleCommunicator> {
+        match &*self.scope.borrow() {
+            Some(c) => Rc::clone(c),
+            None => Rc::new(self.universe.world()),
+        }
+    }
+
+    /// Runs `f` on the first `ranks` ranks of the job only (collective over the job): inside,
+    /// [`Petsc::world`], [`Petsc::rank`], [`Petsc::size`] and the communicator of every new
+    /// PETSc object ([`super::comm`]) are those ranks'; the other ranks skip `f` (they get
+    /// `None`) and wait for its end. `ranks` must be between 1 and the job's size; with the
+    /// job's size this is `Some(f())` on every rank.
+    pub fn on_first_ranks<R>(&self, ranks: usize, f: impl FnOnce() -> R) -> Option<R> {
+        let world = self.universe.world();
+        let size = world.size() as usize;
+        assert!(
+            (1..=size).contains(&ranks) && self.scope.borrow().is_none(),
+            "on_first_ranks({ranks}) on a job of {size} ranks (not nested)"
+        );
+        if ranks == size {
+            return Some(f());
+        }
+        let inside = (world.rank() as usize) < ranks;
+        let color = if inside {
+            Color::with_value(0)
+        } else {
+            Color::undefined()
+        };
+        let out = world.split_by_color(color).map(|sub| {
+            // The same MPI communicator handle, in the bindings' type (both OpenMPI's
+            // `ompi_communicator_t *`).
+            super::set_run_comm(Some(sub.as_raw() as petsc_ffi::MPI_Comm));
+            *self.scope.borrow_mut() = Some(Rc::new(sub));
+            let out = f();
+            super::set_run_comm(None);
+            // Every PETSc object of the run is gone: the communicator is freed.
+            self.scope.borrow_mut().take();
+            out
+        });
+        world.barrier();
+        out
     }
 
     /// Options set on the command line or in the options file that no PETSc object ever read,
@@ -104,14 +152,14 @@ impl Petsc {
         Ok(n.max(0) as usize)
     }
 
-    /// This process's rank.
+    /// This process's rank in [`Petsc::world`].
     pub fn rank(&self) -> usize {
-        self.universe.world().rank() as usize
+        self.world().rank() as usize
     }
 
-    /// Number of ranks.
+    /// Number of ranks of [`Petsc::world`].
     pub fn size(&self) -> usize {
-        self.universe.world().size() as usize
+        self.world().size() as usize
     }
 }
 

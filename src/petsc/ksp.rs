@@ -29,7 +29,7 @@ impl Ksp {
     pub fn new() -> Result<Ksp> {
         super::ensure_initialized()?;
         let mut raw: p::KSP = std::ptr::null_mut();
-        chk!(KSPCreate(super::comm_world(), &mut raw))?;
+        chk!(KSPCreate(super::comm(), &mut raw))?;
         let ksp = Ksp { raw };
         set_linear_solver_defaults()?;
         chk!(KSPSetFromOptions(ksp.raw))?;

@@ -52,7 +52,7 @@ impl Matrix {
         let n = to_petsc_int(sparsity.rows.len())?;
         let (d_nnz, o_nnz) = sparsity.nnz();
         let mut raw: p::Mat = std::ptr::null_mut();
-        chk!(MatCreate(super::comm_world(), &mut raw))?;
+        chk!(MatCreate(super::comm(), &mut raw))?;
         let m = Matrix { raw };
         chk!(MatSetSizes(
             m.raw,

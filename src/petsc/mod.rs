@@ -78,10 +78,24 @@ pub(crate) fn is_finalized() -> bool {
     fin == petsc_ffi::PetscBool::PETSC_TRUE
 }
 
-/// The world communicator as PETSc sees it.
-pub fn comm_world() -> petsc_ffi::MPI_Comm {
-    // SAFETY: returns a constant handle; valid after MPI_Init.
-    unsafe { petsc_ffi::petsc_ffi_comm_world() }
+thread_local! {
+    /// The communicator of a run on fewer ranks than the job ([`Petsc::on_first_ranks`]).
+    static RUN_COMM: std::cell::Cell<Option<petsc_ffi::MPI_Comm>> =
+        const { std::cell::Cell::new(None) };
+}
+
+/// The communicator parallel PETSc objects are created on: `PETSC_COMM_WORLD`, or the ranks
+/// of a run on fewer ranks than the job ([`Petsc::on_first_ranks`]).
+pub fn comm() -> petsc_ffi::MPI_Comm {
+    RUN_COMM.with(|c| c.get()).unwrap_or_else(|| {
+        // SAFETY: returns a constant handle; valid after MPI_Init.
+        unsafe { petsc_ffi::petsc_ffi_comm_world() }
+    })
+}
+
+/// Sets (or, with `None`, unsets) the communicator returned by [`comm`].
+fn set_run_comm(raw: Option<petsc_ffi::MPI_Comm>) {
+    RUN_COMM.with(|c| c.set(raw));
 }
 
 /// The self communicator.

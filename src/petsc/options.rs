@@ -33,3 +33,122 @@ pub fn set_default(name: &str, value: &str) -> Result<()> {
         v.as_ptr()
     ))
 }
+
+/// Options set for a while (a study variant's runs): [`Override::set`] puts each `-name value`
+/// into the database, over the options file and the command line, remembering what was there;
+/// dropping the guard puts the old values back (or clears the names that were not set).
+#[derive(Debug)]
+pub struct Override {
+    /// Each name with its previous value: `None` = not set, `Some(None)` = set without value.
+    previous: Vec<(CString, Option<Option<CString>>)>,
+}
+
+impl Override {
+    /// Sets `options` (names with a leading `-` and their values, `None` for a flag).
+    pub fn set(options: &[(String, Option<String>)]) -> Result<Override> {
+        let mut guard = Override {
+            previous: Vec::with_capacity(options.len()),
+        };
+        for (name, value) in options {
+            let n = CString::new(name.as_str()).expect("option names have no NUL");
+            let before = current_value(&n)?;
+            guard.previous.push((n.clone(), before));
+            let v = value
+                .as_deref()
+                .map(|v| CString::new(v).expect("option values have no NUL"));
+            set_value(&n, v.as_ref())?;
+        }
+        Ok(guard)
+    }
+}
+
+impl Drop for Override {
+    fn drop(&mut self) {
+        for (name, before) in self.previous.drain(..).rev() {
+            let restored = match &before {
+                Some(value) => set_value(&name, value.as_ref()),
+                // SAFETY: a valid NUL-terminated name; the default database.
+                None => chk!(PetscOptionsClearValue(std::ptr::null_mut(), name.as_ptr())),
+            };
+            if let Err(e) = restored {
+                eprintln!(
+                    "mortar: warning: could not restore PETSc option {}: {e}",
+                    name.to_string_lossy()
+                );
+            }
+        }
+    }
+}
+
+/// The value of `-name` in the database: `None` if it is not set, `Some(None)` for a flag.
+fn current_value(name: &CString) -> Result<Option<Option<CString>>> {
+    let mut value: *const std::os::raw::c_char = std::ptr::null();
+    let mut set = p::PetscBool::PETSC_FALSE;
+    chk!(PetscOptionsFindPair(
+        std::ptr::null_mut(),
+        std::ptr::null(),
+        name.as_ptr(),
+        &mut value,
+        &mut set
+    ))?;
+    if set != p::PetscBool::PETSC_TRUE {
+        return Ok(None);
+    }
+    if value.is_null() {
+        return Ok(Some(None));
+    }
+    // SAFETY: PETSc returned a NUL-terminated string it owns; it is copied at once.
+    let owned = unsafe { std::ffi::CStr::from_ptr(value) }.to_owned();
+    Ok(Some(Some(owned)))
+}
+
+fn set_value(name: &CString, value: Option<&CString>) -> Result<()> {
+    chk!(PetscOptionsSetValue(
+        std::ptr::null_mut(),
+        name.as_ptr(),
+        value.map_or(std::ptr::null(), |v| v.as_ptr())
+    ))
+}
+
+/// Splits an options string (`-ksp_type gmres -pc_type gamg -ksp_monitor`) into names and
+/// values, as PETSc reads its command line: a word starting with `-` and a letter is a name,
+/// any other word is the value of the name before it. An error names the first stray value.
+pub fn parse(text: &str) -> std::result::Result<Vec<(String, Option<String>)>, String> {
+    let mut out: Vec<(String, Option<String>)> = Vec::new();
+    for word in text.split_whitespace() {
+        let is_name = word.starts_with('-')
+            && word[1..].chars().next().is_some_and(|c| c.is_ascii_alphabetic());
+        if is_name {
+            out.push((word.to_string(), None));
+        } else {
+            match out.last_mut() {
+                Some((_, value @ None)) => *value = Some(word.to_string()),
+                Some((name, Some(_))) => {
+                    return Err(format!("'{word}' follows {name} and its value: not an option"))
+                }
+                None => return Err(format!("'{word}' is not an option (options start with -)")),
+            }
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse;
+
+    #[test]
+    fn options_strings_split_into_names_and_values() {
+        let p = parse(" -ksp_type gmres  -ksp_monitor -ksp_rtol 1e-8 -x -1").unwrap();
+        let want: Vec<(String, Option<String>)> = vec![
+            ("-ksp_type".into(), Some("gmres".into())),
+            ("-ksp_monitor".into(), None),
+            ("-ksp_rtol".into(), Some("1e-8".into())),
+            ("-x".into(), Some("-1".into())),
+        ];
+        assert_eq!(p, want);
+        assert!(parse("gmres").unwrap_err().contains("gmres"));
+        assert!(parse("-a b c").unwrap_err().contains("'c'"));
+        assert!(parse("").unwrap().is_empty());
+    }
+}

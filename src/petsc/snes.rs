@@ -102,7 +102,7 @@ impl Snes {
     pub fn new(tol: Tolerances, options_source: &str, line_search: &str) -> Result<Snes> {
         super::ensure_initialized()?;
         let mut raw: p::SNES = std::ptr::null_mut();
-        chk!(SNESCreate(super::comm_world(), &mut raw))?;
+        chk!(SNESCreate(super::comm(), &mut raw))?;
         let snes = Snes {
             raw,
             history: Vec::new(),

@@ -16,7 +16,7 @@ impl Vector {
         super::ensure_initialized()?;
         let mut raw: p::Vec = std::ptr::null_mut();
         chk!(VecCreateMPI(
-            super::comm_world(),
+            super::comm(),
             to_petsc_int(local)?,
             p::PETSC_DETERMINE,
             &mut raw

@@ -51,8 +51,20 @@ pub fn run_case(case: &Path, ranks: usize, args: &[&str]) -> (PathBuf, String) {
     (out_dir, stdout)
 }
 
-/// Runs the binary and returns its raw output, whatever the exit status.
+/// Runs `mortar run` and returns its raw output, whatever the exit status.
 pub fn run_raw(case: &Path, ranks: usize, out_dir: &Path, args: &[&str]) -> Output {
+    run_subcommand("run", case, ranks, out_dir, args)
+}
+
+/// Runs `mortar SUBCOMMAND FILE --out OUT ARGS` on `ranks` ranks (1: without mpirun) and
+/// returns its raw output, whatever the exit status.
+pub fn run_subcommand(
+    subcommand: &str,
+    file: &Path,
+    ranks: usize,
+    out_dir: &Path,
+    args: &[&str],
+) -> Output {
     let exe = env!("CARGO_BIN_EXE_mortar");
     let mut cmd = if ranks == 1 {
         Command::new(exe)
@@ -69,8 +81,8 @@ pub fn run_raw(case: &Path, ranks: usize, out_dir: &Path, args: &[&str]) -> Outp
         c
     };
     mpi_env(&mut cmd)
-        .arg("run")
-        .arg(case)
+        .arg(subcommand)
+        .arg(file)
         .arg("--out")
         .arg(out_dir)
         .args(args)
