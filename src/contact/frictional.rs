@@ -127,6 +127,7 @@ use crate::dofs::DofMap;
 use crate::error::Result;
 use crate::fe::{face_normal, FaceType};
 use crate::mesh::FaceRef;
+use crate::petsc::log::Section;
 use crate::petsc::{Matrix, PetscInt, Sparsity, Vector};
 
 /// A node carries traction only if its overlap integral `a_A` is at least this fraction of its
@@ -258,6 +259,31 @@ pub struct ContactInterfaces {
     x_old: Vec<[f64; 3]>,
     /// Every pressed node sticks (the stick predictor), whatever its Coulomb cone.
     stick_all: std::cell::Cell<bool>,
+    /// Where the time of the residual and tangent evaluations goes.
+    pub timings: ContactTimings,
+}
+
+/// The contact work of the residual and tangent evaluations, each a PETSc log stage and a
+/// wall-clock total (the output and Uzawa evaluations are not counted).
+#[derive(Clone, Debug)]
+pub struct ContactTimings {
+    /// The search: the primary faces' tree and the candidate pairs.
+    pub search: Section,
+    /// The mortar integration of the candidate pairs, with the nodal normals.
+    pub integration: Section,
+    /// The nodal laws, their tangents and the insertion into PETSc's vector or matrix
+    /// (node-on-segment: the projections too).
+    pub assembly: Section,
+}
+
+impl Default for ContactTimings {
+    fn default() -> Self {
+        ContactTimings {
+            search: Section::new("Contact search"),
+            integration: Section::new("Mortar integration"),
+            assembly: Section::new("Contact assembly"),
+        }
+    }
 }
 
 /// A state saved before a step, to restore when the step is cut.
@@ -349,6 +375,7 @@ impl ContactInterfaces {
             node_owner: dofs.node_owner.clone(),
             x_old: scene.mesh.coords.clone(),
             stick_all: Default::default(),
+            timings: ContactTimings::default(),
         })
     }
 
@@ -432,44 +459,61 @@ impl ContactInterfaces {
         mut sink: impl FnMut(&NodeBlock) -> Result<()>,
     ) -> Result<Option<String>> {
         let x = current_positions(scene, u);
+        let timed = &self.timings;
         for iface in &self.interfaces {
             let mut stats = RejectStats::default();
             for pass in &iface.passes {
                 let ctx = iface.context(self.stick_all.get(), &x, &self.x_old);
                 if pass.method == ContactMethod::NodeOnSegment {
-                    let tree = pass.primary_tree(&x);
-                    for &a in &pass.owned {
-                        let (block, _) = pass.nts_node(&ctx, &tree, a, tangent);
-                        if let Some(block) = block {
-                            if block.force.iter().any(|v| !v.is_finite()) {
-                                return Ok(Some(format!(
-                                    "interface '{}': non-finite node-on-segment force",
-                                    iface.name
-                                )));
+                    let tree = timed.search.time(|| pass.primary_tree(&x));
+                    let failed = timed.assembly.time(|| -> Result<bool> {
+                        for &a in &pass.owned {
+                            let (block, _) = pass.nts_node(&ctx, &tree, a, tangent);
+                            if let Some(block) = block {
+                                if block.force.iter().any(|v| !v.is_finite()) {
+                                    return Ok(true);
+                                }
+                                sink(&block)?;
                             }
-                            sink(&block)?;
                         }
+                        Ok(false)
+                    })?;
+                    if failed {
+                        return Ok(Some(format!(
+                            "interface '{}': non-finite node-on-segment force",
+                            iface.name
+                        )));
                     }
                     continue;
                 }
-                let normals = match pass.normals(&x) {
+                let candidates =
+                    timed
+                        .search
+                        .time(|| pass.candidates(&x, &pass.local_faces, EVAL_MARGIN));
+                let integrated = timed.integration.time(|| {
+                    pass.normals(&x)
+                        .map(|normals| (normals, pass.integrate(&ctx, candidates, tangent, &mut stats)))
+                });
+                let (normals, pairs) = match integrated {
                     Ok(n) => n,
                     Err(e) => return Ok(Some(format!("interface '{}': {e}", iface.name))),
                 };
-                let pairs = pass.integrate(&ctx, &pass.local_faces, tangent, &mut stats);
                 if stats.non_finite > 0 {
                     return Ok(Some(format!(
                         "interface '{}': non-finite values in the mortar integration",
                         iface.name
                     )));
                 }
-                let by_node = pass.pairs_by_node(&pairs, &pass.owned);
-                for (&a, terms) in &by_node {
-                    let (block, _) = pass.node_block(&ctx, &normals, a, terms, tangent);
-                    if let Some(block) = block {
-                        sink(&block)?;
+                timed.assembly.time(|| -> Result<()> {
+                    let by_node = pass.pairs_by_node(&pairs, &pass.owned);
+                    for (&a, terms) in &by_node {
+                        let (block, _) = pass.node_block(&ctx, &normals, a, terms, tangent);
+                        if let Some(block) = block {
+                            sink(&block)?;
+                        }
                     }
-                }
+                    Ok(())
+                })?;
             }
             *iface.stats.borrow_mut() = stats;
         }
@@ -540,7 +584,8 @@ impl ContactInterfaces {
             return Vec::new();
         };
         let mut stats = RejectStats::default();
-        let pairs = p.integrate(&ctx, &p.local_faces, false, &mut stats);
+        let candidates = p.candidates(&x, &p.local_faces, EVAL_MARGIN);
+        let pairs = p.integrate(&ctx, candidates, false, &mut stats);
         let by_node = p.pairs_by_node(&pairs, &p.owned);
         p.owned
             .iter()
@@ -1110,16 +1155,17 @@ impl ContactPass {
         (Some(block), fields)
     }
 
-    /// Integrates every candidate pair of `faces`, in canonical order.
+    /// Integrates every candidate pair (secondary face, its candidate primary faces; see
+    /// [`ContactPass::candidates`]), in canonical order.
     fn integrate(
         &self,
         ctx: &EvalContext,
-        faces: &[usize],
+        candidates: Vec<(usize, Vec<usize>)>,
         tangent: bool,
         stats: &mut RejectStats,
     ) -> Vec<PairData> {
         let mut out = Vec::new();
-        for (s, ms) in self.candidates(ctx.x, faces, EVAL_MARGIN) {
+        for (s, ms) in candidates {
             let sf = &self.sec_faces[s];
             let sx: Vec<[f64; 3]> = sf.nodes.iter().map(|&n| ctx.x[n]).collect();
             for m in ms {

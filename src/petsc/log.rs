@@ -98,3 +98,44 @@ impl Phases {
         &self.seconds
     }
 }
+
+/// One timed section of work that runs inside another phase's callbacks (the contact search
+/// inside the residual evaluation, say): a PETSc log stage pushed while it runs, so
+/// `-log_view` reports it apart, and its accumulated wall-clock seconds. Interior mutability:
+/// the code it times holds only shared references.
+#[derive(Clone, Debug)]
+pub struct Section {
+    stage: Option<Stage>,
+    seconds: std::cell::Cell<f64>,
+}
+
+impl Section {
+    /// The section logged as stage `name`. Without PETSc (unit tests of the kernels), or if
+    /// PETSc refuses the stage, it is only timed.
+    pub fn new(name: &str) -> Section {
+        let stage = if super::is_initialized() {
+            Stage::register(name).ok()
+        } else {
+            None
+        };
+        Section {
+            stage,
+            seconds: std::cell::Cell::new(0.0),
+        }
+    }
+
+    /// Runs `f` inside the section.
+    pub fn time<R>(&self, f: impl FnOnce() -> R) -> R {
+        let guard = self.stage.and_then(|s| s.push().ok());
+        let t = Instant::now();
+        let out = f();
+        self.seconds.set(self.seconds.get() + t.elapsed().as_secs_f64());
+        drop(guard);
+        out
+    }
+
+    /// Seconds spent in the section so far.
+    pub fn seconds(&self) -> f64 {
+        self.seconds.get()
+    }
+}

@@ -70,6 +70,14 @@ pub(crate) fn ensure_initialized() -> crate::Result<()> {
     Ok(())
 }
 
+/// True between `PetscInitialize` and `PetscFinalize`.
+pub(crate) fn is_initialized() -> bool {
+    let mut init = petsc_ffi::PetscBool::PETSC_FALSE;
+    // SAFETY: PetscInitialized only writes the flag; it is valid before and after init.
+    unsafe { petsc_ffi::PetscInitialized(&mut init) };
+    init == petsc_ffi::PetscBool::PETSC_TRUE && !is_finalized()
+}
+
 /// True once `PetscFinalize` has run: `Drop` impls then leave their (already freed) objects alone.
 pub(crate) fn is_finalized() -> bool {
     let mut fin = petsc_ffi::PetscBool::PETSC_FALSE;

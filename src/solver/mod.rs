@@ -63,6 +63,22 @@ const FULL_STEP_ITERATIONS: usize = 10;
 /// backtracking `bt` crept at 14-20.
 const FALLBACK_LINE_SEARCH: &str = "l2";
 
+/// The parts of the assembly timed apart (`summary.json` timings), in the order of
+/// [`contact_seconds`]: the contact search, the mortar integration and the contact assembly of
+/// the residual and tangent evaluations. `bulk_assembly` is the rest of the assembly (the
+/// bulk elements, tied interfaces and PETSc's vector and matrix assembly).
+const CONTACT_PHASES: [&str; 3] = ["contact_search", "contact_integration", "contact_assembly"];
+
+/// The contact timers so far, in the order of [`CONTACT_PHASES`].
+fn contact_seconds(model: &Model) -> [f64; 3] {
+    let t = &model.contact.timings;
+    [
+        t.search.seconds(),
+        t.integration.seconds(),
+        t.assembly.seconds(),
+    ]
+}
+
 /// How a run is carried out.
 #[derive(Clone, Debug)]
 pub struct RunOptions {
@@ -106,6 +122,9 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         }
     };
     let mut phases = Phases::new(&["setup", "assembly", "solve", "output"])?;
+    for name in CONTACT_PHASES.iter().chain(&["bulk_assembly"]) {
+        phases.add(name, 0.0);
+    }
     let t_setup = Instant::now();
     let setup_guard = phases.push("setup")?;
 
@@ -220,6 +239,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
             let contact_saved = model.contact.save();
             state.borrow_mut().assembly_seconds = 0.0;
             let t_solve = Instant::now();
+            let contact_before = contact_seconds(&model);
             if scene.predictor {
                 let p = Predictor {
                     scene,
@@ -341,6 +361,17 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
             let solve_seconds = t_solve.elapsed().as_secs_f64();
             phases.add("assembly", assembly);
             phases.add("solve", (solve_seconds - assembly).max(0.0));
+            // The contact work of this solve's evaluations, and the bulk (the rest of them).
+            let contact_now = contact_seconds(&model);
+            let mut contact_total = 0.0;
+            for (name, (now, before)) in CONTACT_PHASES
+                .iter()
+                .zip(contact_now.iter().zip(&contact_before))
+            {
+                phases.add(name, now - before);
+                contact_total += now - before;
+            }
+            phases.add("bulk_assembly", (assembly - contact_total).max(0.0));
             // (The predictor's factorization counts: a linear scene may need no Newton step.)
             let null_pivots = snes.null_pivots()?;
             if let Some(n) = null_pivots.filter(|&n| n > 0) {
