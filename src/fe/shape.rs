@@ -307,6 +307,30 @@ impl ElementType {
     }
 }
 
+/// Calls `f(a, N_a, grad N_a)` for every node `a` of a face of type `ft` at `xi`. On the tensor
+/// faces (Quad4, Quad9) the 1D factors of each axis are evaluated once for the three node
+/// positions `-1, 0, 1` rather than once per node: the same floating-point operations as
+/// [`FaceType::shape_node_at`] for each node.
+#[inline]
+fn for_face_nodes<T: Scalar>(ft: FaceType, xi: [T; 2], mut f: impl FnMut(usize, (T, [T; 2]))) {
+    let one_d: fn(f64, T) -> (T, T) = match ft {
+        FaceType::Quad4 => linear_1d,
+        FaceType::Quad9 => quadratic_1d,
+        _ => {
+            for a in 0..ft.num_nodes() {
+                f(a, ft.shape_node_at(xi, a));
+            }
+            return;
+        }
+    };
+    let factors: [[(T, T); 3]; 2] =
+        std::array::from_fn(|i| std::array::from_fn(|k| one_d(k as f64 - 1.0, xi[i])));
+    for (a, s) in QUAD_NODES[..ft.num_nodes()].iter().enumerate() {
+        let fd: [(T, T); 2] = std::array::from_fn(|i| factors[i][(s[i] + 1.0) as usize]);
+        f(a, tensor_product(fd.map(|v| v.0), fd.map(|v| v.1)));
+    }
+}
+
 impl FaceType {
     /// Value and parametric gradient of shape function `a` at `xi`, for any [`Scalar`].
     #[inline]
@@ -343,9 +367,7 @@ impl FaceType {
     /// If `n.len() != self.num_nodes()`.
     pub fn shape_at<T: Scalar>(self, xi: [T; 2], n: &mut [T]) {
         assert_eq!(n.len(), self.num_nodes(), "shape: wrong buffer length");
-        for (a, na) in n.iter_mut().enumerate() {
-            *na = self.shape_node_at(xi, a).0;
-        }
+        for_face_nodes(self, xi, |a, (v, _)| n[a] = v);
     }
 
     /// Values and gradients at once, for any [`Scalar`] ([`FaceType::shape_at`] and
@@ -356,9 +378,7 @@ impl FaceType {
     pub fn shape_and_grad_at<T: Scalar>(self, xi: [T; 2], n: &mut [T], dn: &mut [[T; 2]]) {
         assert_eq!(n.len(), self.num_nodes(), "shape: wrong buffer length");
         assert_eq!(dn.len(), self.num_nodes(), "shape: wrong buffer length");
-        for (a, (na, ga)) in n.iter_mut().zip(dn.iter_mut()).enumerate() {
-            (*na, *ga) = self.shape_node_at(xi, a);
-        }
+        for_face_nodes(self, xi, |a, (v, g)| (n[a], dn[a]) = (v, g));
     }
 
     /// [`FaceType::shape_grad`] for any [`Scalar`] (with a dual `xi`, the gradients carry the
@@ -372,9 +392,7 @@ impl FaceType {
             self.num_nodes(),
             "shape_grad: wrong buffer length"
         );
-        for (a, ga) in dn.iter_mut().enumerate() {
-            *ga = self.shape_node_at(xi, a).1;
-        }
+        for_face_nodes(self, xi, |a, (_, g)| dn[a] = g);
     }
 }
 

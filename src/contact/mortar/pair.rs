@@ -351,9 +351,9 @@ pub(super) fn triangle_local<T: Scalar>(q: &[[T; 2]], p: [T; 2]) -> ([T; 2], T) 
 /// coordinates) in the monomial form `P = p0 + a s + b t + c s t`, for any [`Scalar`].
 pub(super) struct Bilinear<T = f64> {
     p0: [T; 2],
-    a: [T; 2],
-    b: [T; 2],
-    c: [T; 2],
+    pub(super) a: [T; 2],
+    pub(super) b: [T; 2],
+    pub(super) c: [T; 2],
 }
 
 impl<T: Scalar> Bilinear<T> {
@@ -453,6 +453,11 @@ impl<'s> Projected<'s> {
             orientation,
             bilinear,
         }
+    }
+
+    /// The bilinear map of a quadrilateral (`None` for a triangle).
+    pub(super) fn bilinear(&self) -> Option<&Bilinear> {
+        self.bilinear.as_ref()
     }
 
     /// Local coordinates of `p` (barycentric on a triangle, bilinear inverse on a quad).
