@@ -331,7 +331,42 @@ fn for_face_nodes<T: Scalar>(ft: FaceType, xi: [T; 2], mut f: impl FnMut(usize, 
     }
 }
 
+/// Second derivative of the 1D factor `linear_1d` (zero) or `quadratic_1d` of the node at `s`.
+fn second_derivative_1d(ft: FaceType, s: f64) -> f64 {
+    match ft {
+        FaceType::Quad9 if s == 0.0 => -2.0,
+        FaceType::Quad9 => 1.0,
+        _ => 0.0,
+    }
+}
+
 impl FaceType {
+    /// Values, gradients and second derivatives `[N_,xixi, N_,xieta, N_,etaeta]` of the shape
+    /// functions of a Quad4 or Quad9 face at `xi` (products of the 1D factors, see
+    /// [`for_face_nodes`]); `false` (nothing written) for the other faces.
+    pub fn tensor_shape_with_hessian(
+        self,
+        xi: [f64; 2],
+        n: &mut [f64],
+        dn: &mut [[f64; 2]],
+        ddn: &mut [[f64; 3]],
+    ) -> bool {
+        if !matches!(self, FaceType::Quad4 | FaceType::Quad9) {
+            return false;
+        }
+        for_face_nodes(self, xi, |a, (v, g)| (n[a], dn[a]) = (v, g));
+        let one_d = |s: f64, t: f64| match self {
+            FaceType::Quad4 => linear_1d(s, t),
+            _ => quadratic_1d(s, t),
+        };
+        for (a, s) in QUAD_NODES[..self.num_nodes()].iter().enumerate() {
+            let [(f0, d0), (f1, d1)] = [one_d(s[0], xi[0]), one_d(s[1], xi[1])];
+            let [h0, h1] = s.map(|si| second_derivative_1d(self, si));
+            ddn[a] = [h0 * f1, d0 * d1, f0 * h1];
+        }
+        true
+    }
+
     /// Value and parametric gradient of shape function `a` at `xi`, for any [`Scalar`].
     #[inline]
     fn shape_node_at<T: Scalar>(self, xi: [T; 2], a: usize) -> (T, [T; 2]) {

@@ -97,7 +97,7 @@
 //! exactly on an edge, slivers, NaN coordinates).
 
 use nalgebra::DMatrix;
-use num_dual::{DualNum, DualSVec64};
+use num_dual::DualSVec64;
 
 use super::clip::{area_centroid_at, VertexOrigin};
 use super::pair::{
@@ -441,18 +441,23 @@ impl<'a> Kernel<'a> {
         &self,
         at: &PointGeometry,
         phi_scratch: &mut Vec<ParentDual>,
-    ) -> (PointValues, ParentDual, [f64; MAX_SEC_DOFS]) {
+    ) -> (PointValues, OfParent, [f64; MAX_SEC_DOFS]) {
         let (sec, pri) = (self.sec, self.pri);
-        let (ns, np) = (sec.x.len(), pri.x.len());
-        let zero = ParentDual::from_re(0.0);
-        let (mut n, mut dn) = ([zero; MAX_NODES], [[zero; 2]; MAX_NODES]);
+        let ns = sec.x.len();
         let mut values = PointValues::default();
-        let s_parent = parent_seed(at.xi_s.map(|v| v.re));
-        sec.kind
-            .shape_and_grad_at(s_parent, &mut n[..ns], &mut dn[..ns]);
+        let xi_s = at.xi_s.map(|v| v.re);
+        let (mut n, mut dn, mut ddn) = (
+            [0.0; MAX_NODES],
+            [[0.0; 2]; MAX_NODES],
+            [[0.0; 3]; MAX_NODES],
+        );
+        shape_with_hessian(sec.kind, xi_s, &mut n[..ns], &mut dn[..ns], &mut ddn[..ns]);
         let mut dj_dx = [0.0; MAX_SEC_DOFS];
-        let face_jacobian = face_jacobian(sec.x, &dn[..ns], &mut dj_dx);
-        OfParent::fill(&mut values.n1, &n[..ns]);
+        let face_jacobian = face_jacobian(sec.x, &dn[..ns], &ddn[..ns], &mut dj_dx);
+        for ((t, re), d) in values.n1.iter_mut().zip(&n[..ns]).zip(&dn[..ns]) {
+            *t = OfParent { re: *re, d: *d };
+        }
+        let s_parent = parent_seed(xi_s);
         match self.scheme {
             TractionScheme::FaceShape => values.phi = values.n1,
             // The corner functions are the linear face's: values and gradients in floats.
@@ -485,37 +490,74 @@ fn float_shape(kind: FaceType, xi: [f64; 2], to: &mut [OfParent]) {
     }
 }
 
+/// The shape functions of the secondary face at `xi`: values, gradients and second derivatives
+/// `[N_,xixi, N_,xieta, N_,etaeta]` (for the `xi`-derivatives of `J_face`), in floats on Quad4
+/// and Quad9, from the generic kernels in `ParentDual` numbers on the other faces.
+fn shape_with_hessian(
+    kind: FaceType,
+    xi: [f64; 2],
+    n: &mut [f64],
+    dn: &mut [[f64; 2]],
+    ddn: &mut [[f64; 3]],
+) {
+    if kind.tensor_shape_with_hessian(xi, n, dn, ddn) {
+        return;
+    }
+    let nn = kind.num_nodes();
+    let zero = ParentDual::from_re(0.0);
+    let (mut nd, mut dnd) = ([zero; MAX_NODES], [[zero; 2]; MAX_NODES]);
+    kind.shape_and_grad_at(parent_seed(xi), &mut nd[..nn], &mut dnd[..nn]);
+    for a in 0..nn {
+        let (g0, g1) = (slots(&dnd[a][0]), slots(&dnd[a][1]));
+        n[a] = nd[a].re;
+        dn[a] = [dnd[a][0].re, dnd[a][1].re];
+        ddn[a] = [g0[0], g0[1], g1[1]];
+    }
+}
+
 /// The surface Jacobian `J_face = |x_,xi x x_,eta|` of a face with node coordinates `x` from
-/// its shape-function gradients `dn` at a point (with their `xi`-derivatives, so `J_face`
-/// carries its own), and `dJ_face/dx_a` (node `a`, axis `d` at `3 a + d`) into `dj_dx`.
+/// its shape-function gradients `dn` and second derivatives `ddn` at a point, with its
+/// `xi`-derivatives `dJ/dxi_j = (c / J) . (t_1,j x t_2 + t_1 x t_2,j)` (`c = t_1 x t_2`,
+/// `t_i,j = sum_a N_a,ij x_a`), and `dJ_face/dx_a` (node `a`, axis `d` at `3 a + d`) into
+/// `dj_dx`.
 fn face_jacobian(
     x: &[[f64; 3]],
-    dn: &[[ParentDual; 2]],
+    dn: &[[f64; 2]],
+    ddn: &[[f64; 3]],
     dj_dx: &mut [f64; MAX_SEC_DOFS],
-) -> ParentDual {
-    let mut t = [[ParentDual::from_re(0.0); 3]; 2];
-    for (xa, ga) in x.iter().zip(dn) {
-        for (ti, gi) in t.iter_mut().zip(ga) {
-            for d in 0..3 {
-                ti[d] += *gi * xa[d];
+) -> OfParent {
+    // t[i] = x_,i; dt[j][i] = x_,ij.
+    let mut t = [[0.0; 3]; 2];
+    let mut dt = [[[0.0; 3]; 2]; 2];
+    for ((xa, ga), ha) in x.iter().zip(dn).zip(ddn) {
+        let h = [[ha[0], ha[1]], [ha[1], ha[2]]];
+        for d in 0..3 {
+            for i in 0..2 {
+                t[i][d] += ga[i] * xa[d];
+                for j in 0..2 {
+                    dt[j][i][d] += h[i][j] * xa[d];
+                }
             }
         }
     }
     let c = cross_at(t[0], t[1]);
     let jacobian = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
+    let d = dt.map(|dtj| {
+        let dc = [cross_at(dtj[0], t[1]), cross_at(t[0], dtj[1])];
+        (0..3).map(|k| c[k] * (dc[0][k] + dc[1][k])).sum::<f64>() / jacobian
+    });
     dj_dx.fill(0.0);
-    if jacobian.re > 0.0 {
+    if jacobian > 0.0 {
         // dJ = (t2 x n) . dt1 + (n x t1) . dt2, dt_i = sum_a N_a,i dx_a.
-        let n = c.map(|v| v.re / jacobian.re);
-        let [t1, t2] = t.map(|ti| ti.map(|v| v.re));
-        let (h1, h2) = (cross_at(t2, n), cross_at(n, t1));
+        let n = c.map(|v| v / jacobian);
+        let (h1, h2) = (cross_at(t[1], n), cross_at(n, t[0]));
         for (a, g) in dn.iter().enumerate() {
             for d in 0..3 {
-                dj_dx[3 * a + d] = h1[d] * g[0].re + h2[d] * g[1].re;
+                dj_dx[3 * a + d] = h1[d] * g[0] + h2[d] * g[1];
             }
         }
     }
-    jacobian
+    OfParent { re: jacobian, d }
 }
 
 /// The projected vertices of a sub-segment of a face with dual coordinates `x`.
@@ -608,8 +650,8 @@ impl PlaneValue {
 
     /// `self * f(xi(P))` for a function `f` of the parent coordinates given with its
     /// `xi`-derivatives and `xi` with its `P`-derivatives (the chain rule to plane coordinates).
-    fn times_lifted(&self, f: &ParentDual, xi: &[PlaneValue; 2]) -> Self {
-        let g = slots(f);
+    fn times_lifted(&self, f: &OfParent, xi: &[PlaneValue; 2]) -> Self {
+        let g = f.d;
         PlaneValue {
             re: self.re * f.re,
             d: std::array::from_fn(|k| {
