@@ -313,16 +313,25 @@ impl ElementType {
 /// [`FaceType::shape_node_at`] for each node.
 #[inline]
 fn for_face_nodes<T: Scalar>(ft: FaceType, xi: [T; 2], mut f: impl FnMut(usize, (T, [T; 2]))) {
-    let one_d: fn(f64, T) -> (T, T) = match ft {
-        FaceType::Quad4 => linear_1d,
-        FaceType::Quad9 => quadratic_1d,
+    match ft {
+        FaceType::Quad4 => for_tensor_nodes(ft, xi, linear_1d, f),
+        FaceType::Quad9 => for_tensor_nodes(ft, xi, quadratic_1d, f),
         _ => {
             for a in 0..ft.num_nodes() {
                 f(a, ft.shape_node_at(xi, a));
             }
-            return;
         }
-    };
+    }
+}
+
+/// [`for_face_nodes`] on a tensor face whose 1D factor is `one_d`.
+#[inline]
+fn for_tensor_nodes<T: Scalar>(
+    ft: FaceType,
+    xi: [T; 2],
+    one_d: impl Fn(f64, T) -> (T, T),
+    mut f: impl FnMut(usize, (T, [T; 2])),
+) {
     let factors: [[(T, T); 3]; 2] =
         std::array::from_fn(|i| std::array::from_fn(|k| one_d(k as f64 - 1.0, xi[i])));
     for (a, s) in QUAD_NODES[..ft.num_nodes()].iter().enumerate() {
@@ -482,8 +491,14 @@ pub fn face_tangents_at<T: Scalar>(ft: FaceType, x: &[[T; 3]], xi: [T; 2]) -> ([
     );
     let mut dn = [[T::from(0.0); 2]; MAX_FACE_NODES];
     ft.shape_grad_at(xi, &mut dn[..nn]);
+    tangents_from_grad(x, &dn[..nn])
+}
+
+/// The tangent vectors `x_,xi = sum_a N_a,xi x_a`, `x_,eta` from the shape-function gradients
+/// `dn` at a point (what [`face_tangents_at`] computes after evaluating them).
+pub fn tangents_from_grad<T: Scalar>(x: &[[T; 3]], dn: &[[T; 2]]) -> ([T; 3], [T; 3]) {
     let mut t = [[T::from(0.0); 3]; 2];
-    for (xa, ga) in x.iter().zip(&dn[..nn]) {
+    for (xa, ga) in x.iter().zip(dn) {
         for (tk, gk) in t.iter_mut().zip(ga) {
             for d in 0..3 {
                 tk[d] += *gk * xa[d];
@@ -512,6 +527,11 @@ pub fn face_normal(ft: FaceType, x: &[[f64; 3]], xi: [f64; 2]) -> ([f64; 3], f64
 /// If `x.len() != ft.num_nodes()`.
 pub fn face_normal_at<T: Scalar>(ft: FaceType, x: &[[T; 3]], xi: [T; 2]) -> ([T; 3], T) {
     let (t1, t2) = face_tangents_at(ft, x, xi);
+    normal_from_tangents(t1, t2)
+}
+
+/// The unit normal and surface Jacobian of [`face_normal_at`] from the tangent vectors.
+pub fn normal_from_tangents<T: Scalar>(t1: [T; 3], t2: [T; 3]) -> ([T; 3], T) {
     let c = cross_at(t1, t2);
     let jac = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
     if jac.re() > 0.0 {
