@@ -352,7 +352,7 @@ fn second_derivative_1d(ft: FaceType, s: f64) -> f64 {
 impl FaceType {
     /// Values, gradients and second derivatives `[N_,xixi, N_,xieta, N_,etaeta]` of the shape
     /// functions of a Quad4 or Quad9 face at `xi` (products of the 1D factors, see
-    /// [`for_face_nodes`]); `false` (nothing written) for the other faces.
+    /// `for_face_nodes`); `false` (nothing written) for the other faces.
     pub fn tensor_shape_with_hessian(
         self,
         xi: [f64; 2],

@@ -33,17 +33,21 @@
 //!      projected first edge, `e2 = n x e1`: the very code of `pair.rs`, generic over the
 //!      scalar) and the projected vertices of `s` and `m`: at most 16 plane coordinates `P`,
 //!      and their Jacobian `dP/dy`.
-//!    - *Level 2* (`DualSVec64<16>`, seeded on those plane coordinates): the overlap vertices
-//!      from their provenance (a crossing of the lines `a b` and `c d` is
+//!    - *Level 2* (derivatives with respect to those 16 plane coordinates): the overlap
+//!      vertices from their provenance (a crossing of the lines `a b` and `c d` is
 //!      `a + t (b - a)`, `t = o_a / (o_a - o_b)`, `o` the orientation about `c d`), the pallet
-//!      centroid, the pallet areas and quadrature points, the local coordinates of each point on
-//!      both projected sub-segments, `det(dP/dlocal)`, the face parent coordinates `xi_s`,
-//!      `xi_m` (the sub-segments' affine maps), and from these `Phi(xi_s)`, `N1(xi_s)`,
-//!      `N2(xi_m)` and the surface Jacobian `J_face(xi_s)`.
-//!    - The shape functions are evaluated with the generic kernels of [`crate::fe::shape`] at
-//!      `DualSVec64<2>` parent coordinates (values with their `xi`-derivatives; gradients with
-//!      the second derivatives, for the tangents in `J_face`) and chained to level 2 through
-//!      `dxi/dP`, which is exact and much cheaper than evaluating them in 16-slot duals.
+//!      centroid, the pallet areas, in `DualSVec64<16>` (once per sub-segment pair or pallet);
+//!      then per quadrature point, with the chain rule written out in plain floats
+//!      (`PlaneValue`, whose docs give the formulas): the point, its local coordinates on both
+//!      projected sub-segments, `det(dP/dlocal)`, the face parent coordinates `xi_s`, `xi_m`
+//!      (the sub-segments' affine maps), and from these `Phi(xi_s)`, `N1(xi_s)`, `N2(xi_m)`
+//!      and the surface Jacobian `J_face(xi_s)`. The values are computed by the same float
+//!      operations as in the dual code of `pair.rs`.
+//!    - The shape functions are evaluated in floats with their `xi`-derivatives (and, for the
+//!      secondary face, their second derivatives, for the `xi`-derivatives of `J_face`:
+//!      [`FaceType::tensor_shape_with_hessian`] on Quad4 and Quad9, the generic kernels of
+//!      [`crate::fe::shape`] in `DualSVec64<2>` on the other faces) and chained to level 2
+//!      through `dxi/dP`, which is exact and much cheaper than evaluating them in 16-slot duals.
 //!    - `J_face = |x_,xi x x_,eta|` also depends on the secondary coordinates directly:
 //!      `dJ = (x_,eta x n) . dx_,xi + (n x x_,xi) . dx_,eta` with `dx_,i = sum_a N_a,i dx_a`.
 //!
@@ -77,15 +81,15 @@
 //! Level 1 uses `DualSVec64<N>` with `N = 24` when `ns + np <= 8` (Tri3 and Quad4 pairs) and
 //! `N = 54` otherwise, but only for a few hundred operations per overlapping sub-segment pair
 //! (nothing in duals is computed for pairs that are rejected: those cost the float work only). The bulk is
-//! per quadrature point and independent of `N`: level 2 (16 slots) and the accumulation. The
-//! derivative of `w Phi_k N_b` at a point lies in the span of five directions, `dw/dP`,
-//! `dxi_s/dP` and `dxi_m/dP`, plus `dw/dx_s`; the points of a pallet are tabulated (one
+//! per quadrature point and independent of `N`: level 2 (16 slots, plain floats) and the
+//! accumulation. The derivative of `w Phi_k N_b` at a point lies in the span of five directions,
+//! `dw/dP`, `dxi_s/dP` and `dxi_m/dP`, plus `dw/dx_s`; the points of a pallet are tabulated (one
 //! coefficient per entry and direction) and added by matrix products (`nalgebra`'s `gemm`, which
-//! uses the vectorized `matrixmultiply` kernels), then chained with `dP/dy` once per sub-segment
-//! pair. Scheme 3 skips the traction nodes that are not vertices of the secondary sub-segment.
-//! Nothing is allocated per point. Measured (release, one core, the pairs of
-//! `benches/mortar.rs`, scheme 2): Quad4-Quad4 64 us per pair (8 times `integrate_pair`),
-//! Quad9-Quad9 1.8 ms (8 times).
+//! uses the vectorized `matrixmultiply` kernels; the `n1` rows without the `dxi_m` directions),
+//! then chained with `dP/dy` once per sub-segment pair. Scheme 3 skips the traction nodes that
+//! are not vertices of the secondary sub-segment. Nothing is allocated per point. Measured
+//! (release, one core, the pairs of `benches/mortar.rs`, scheme 2): Quad4-Quad4 46 us per pair
+//! (7 times `integrate_pair`), Quad9-Quad9 1.2 ms (8 times).
 //!
 //! # Tests
 //!
