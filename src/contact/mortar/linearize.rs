@@ -717,6 +717,9 @@ struct PlaneMap<'o> {
     shape: MapShape,
 }
 
+/// The constant level-2 data of a projected sub-segment (see [`PlaneMap`]); one per projected
+/// sub-segment of an overlapping pair, on the stack, so the size of `Quad` does not matter.
+#[allow(clippy::large_enum_variant)]
 enum MapShape {
     Triangle(PlaneValue),
     Quad {
@@ -837,7 +840,7 @@ impl<'o> PlaneMap<'o> {
                     }),
                 }
             }
-            (MapShape::Triangle(det), _) => det.clone(),
+            (&MapShape::Triangle(det), _) => det,
             (MapShape::Quad { .. }, None) => unreachable!("a quadrilateral has its bilinear map"),
         }
     }
