@@ -340,38 +340,74 @@ fn for_tensor_nodes<T: Scalar>(
     }
 }
 
-/// Second derivative of the 1D factor `linear_1d` (zero) or `quadratic_1d` of the node at `s`.
-fn second_derivative_1d(ft: FaceType, s: f64) -> f64 {
+/// The derivatives of the 1D factor of the node at `s` (`linear_1d` or `quadratic_1d`) at `t`
+/// as forward-mode dual numbers compute them when `t` is a dual seeded with derivative 1:
+/// `(d value / dt, d (its derivative) / dt)`. The first equals the derivative `quadratic_1d`
+/// returns up to round-off only: the duals differentiate `t (t -+ 1) / 2` by the product rule,
+/// `(t -+ 1) / 2 + t / 2`, rounded twice.
+fn one_d_dual_slopes(ft: FaceType, s: f64, t: f64) -> (f64, f64) {
     match ft {
-        FaceType::Quad9 if s == 0.0 => -2.0,
-        FaceType::Quad9 => 1.0,
-        _ => 0.0,
+        FaceType::Quad9 if s < -0.5 => (0.5 * (t - 1.0) + t * 0.5, 1.0),
+        FaceType::Quad9 if s > 0.5 => (0.5 * (t + 1.0) + t * 0.5, 1.0),
+        FaceType::Quad9 => (-(t + t), -2.0),
+        _ => (0.5 * s, 0.0),
     }
 }
 
+/// The shape function of a tensor face (Quad4, Quad9) at a point with its derivatives, in
+/// floats, each rounded as the generic kernels compute it in forward-mode dual numbers seeded on
+/// `xi` (see [`FaceType::tensor_shape_derivatives`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct TensorShape {
+    /// `N_a`.
+    pub value: f64,
+    /// `dN_a/dxi_j`: the derivative part of the dual value of [`FaceType::shape_at`].
+    pub value_derivative: [f64; 2],
+    /// `N_a,i`: the gradient of [`FaceType::shape_grad_at`].
+    pub gradient: [f64; 2],
+    /// `d(N_a,i)/dxi_j` at `[i][j]`: the derivative part of the dual gradient.
+    pub gradient_derivative: [[f64; 2]; 2],
+}
+
 impl FaceType {
-    /// Values, gradients and second derivatives `[N_,xixi, N_,xieta, N_,etaeta]` of the shape
-    /// functions of a Quad4 or Quad9 face at `xi` (products of the 1D factors, see
-    /// `for_face_nodes`); `false` (nothing written) for the other faces.
-    pub fn tensor_shape_with_hessian(
-        self,
-        xi: [f64; 2],
-        n: &mut [f64],
-        dn: &mut [[f64; 2]],
-        ddn: &mut [[f64; 3]],
-    ) -> bool {
-        if !matches!(self, FaceType::Quad4 | FaceType::Quad9) {
-            return false;
-        }
-        for_face_nodes(self, xi, |a, (v, g)| (n[a], dn[a]) = (v, g));
-        let one_d = |s: f64, t: f64| match self {
-            FaceType::Quad4 => linear_1d(s, t),
-            _ => quadratic_1d(s, t),
+    /// The shape functions of a Quad4 or Quad9 face at `xi` with their first and second
+    /// derivatives ([`TensorShape`], from the 1D factors of `for_face_nodes`), into the first
+    /// `num_nodes()` entries of `out`; `false` (nothing written) for the other faces.
+    ///
+    /// Every number is the one a dual-number evaluation of the generic kernels at `xi` seeded
+    /// on its two slots gives ([`FaceType::shape_and_grad_at`] with `DualSVec64<2>`), bit for
+    /// bit: the values and gradients by the same float operations, their derivatives by the
+    /// product rule in the duals' order (`d(f_0 f_1) = f_0' f_1 + f_1' f_0` of the 1D factors
+    /// `f`, with the factors' derivatives as the duals round them). So float code built on it
+    /// reproduces a dual code exactly, which matters where derivatives are ill-conditioned.
+    ///
+    /// # Panics
+    /// If `out` is shorter than `num_nodes()`.
+    pub fn tensor_shape_derivatives(self, xi: [f64; 2], out: &mut [TensorShape]) -> bool {
+        let one_d = match self {
+            FaceType::Quad4 => linear_1d::<f64>,
+            FaceType::Quad9 => quadratic_1d::<f64>,
+            _ => return false,
         };
+        // factors[axis][node position -1, 0, 1]: (f, f', f' as the duals round it, f'').
+        let factors: [[(f64, f64, f64, f64); 3]; 2] = std::array::from_fn(|i| {
+            std::array::from_fn(|k| {
+                let s = k as f64 - 1.0;
+                let (f, d) = one_d(s, xi[i]);
+                let (dv, h) = one_d_dual_slopes(self, s, xi[i]);
+                (f, d, dv, h)
+            })
+        });
         for (a, s) in QUAD_NODES[..self.num_nodes()].iter().enumerate() {
-            let [(f0, d0), (f1, d1)] = [one_d(s[0], xi[0]), one_d(s[1], xi[1])];
-            let [h0, h1] = s.map(|si| second_derivative_1d(self, si));
-            ddn[a] = [h0 * f1, d0 * d1, f0 * h1];
+            let [(f0, d0, v0, h0), (f1, d1, v1, h1)] =
+                std::array::from_fn(|i| factors[i][(s[i] + 1.0) as usize]);
+            out[a] = TensorShape {
+                // (The generic kernels multiply from 1.0, which is exact.)
+                value: f0 * f1,
+                value_derivative: [v0 * f1, v1 * f0],
+                gradient: [d0 * f1, d1 * f0],
+                gradient_derivative: [[h0 * f1, v1 * d0], [v0 * d1, h1 * f0]],
+            };
         }
         true
     }

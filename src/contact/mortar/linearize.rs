@@ -41,13 +41,17 @@
 //!      (`PlaneValue`, whose docs give the formulas): the point, its local coordinates on both
 //!      projected sub-segments, `det(dP/dlocal)`, the face parent coordinates `xi_s`, `xi_m`
 //!      (the sub-segments' affine maps), and from these `Phi(xi_s)`, `N1(xi_s)`, `N2(xi_m)`
-//!      and the surface Jacobian `J_face(xi_s)`. The values are computed by the same float
-//!      operations as in the dual code of `pair.rs`.
+//!      and the surface Jacobian `J_face(xi_s)`. Every value and every derivative is computed
+//!      by the floating-point operations, in their order, that 16-slot duals would do (the
+//!      quotient `a / b` as `a * (1 / b)`, the product rule `da b + db a`, ...): the result is
+//!      bit for bit that of the same code in `DualSVec64<16>` (kept in the tests as
+//!      `dual_reference`). See "Exactness" below for why.
 //!    - The shape functions are evaluated in floats with their `xi`-derivatives (and, for the
 //!      secondary face, their second derivatives, for the `xi`-derivatives of `J_face`:
-//!      [`FaceType::tensor_shape_with_hessian`] on Quad4 and Quad9, the generic kernels of
-//!      [`crate::fe::shape`] in `DualSVec64<2>` on the other faces) and chained to level 2
-//!      through `dxi/dP`, which is exact and much cheaper than evaluating them in 16-slot duals.
+//!      [`FaceType::tensor_shape_derivatives`] on Quad4 and Quad9, rounded as `DualSVec64<2>`
+//!      rounds them; the generic kernels of [`crate::fe::shape`] in `DualSVec64<2>` on the other
+//!      faces) and chained to level 2 through `dxi/dP`, which is exact and much cheaper than
+//!      evaluating them in 16-slot duals.
 //!    - `J_face = |x_,xi x x_,eta|` also depends on the secondary coordinates directly:
 //!      `dJ = (x_,eta x n) . dx_,xi + (n x x_,xi) . dx_,eta` with `dx_,i = sum_a N_a,i dx_a`.
 //!
@@ -64,6 +68,26 @@
 //! Real parts: every dual computation runs the same formulas as the float path, and the overlap
 //! vertices keep the float clipping's values as real part (the provenance supplies only their
 //! derivatives), so the weights equal those of [`super::integrate_pair`] up to round-off.
+//!
+//! # Exactness
+//!
+//! The float level 2 reproduces the dual formulation bit for bit, values and derivatives, not
+//! just to round-off, for two reasons measured on the bending scene (`cases/bending`):
+//!
+//! - The nonlinear solve depends on the last bit of the weights where surfaces touch exactly:
+//!   there the weighted gaps are round-off (`+-1e-16`) and their signs decide which nodes get a
+//!   (round-off) pressure and so a friction state at the first tangent, the predictor's. With
+//!   one quotient rounded as `a / b` instead of the duals' `a * (1 / b)` the weights changed in
+//!   the last bit, the friction states of the first tangent with them, and the scene's first
+//!   load step no longer converged.
+//! - Where an overlap vertex is the crossing of two nearly parallel edges (edges of the two
+//!   meshes a few `1e-5` apart), its plane derivatives reach `1e12` and cancel in the integral:
+//!   the derivatives are then only as accurate as `1e-16 * 1e12` allows, and a different order
+//!   of the same operations changed them by up to `1e-4` relative.
+//!
+//! Keeping the duals' operations keeps the kernel's results those of the dual formulation (so a
+//! scene converges as it did with it); the test `float_level2_reproduces_the_dual_reference`
+//! checks it on generic pairs of every face type and scheme and on pairs of the bending scene.
 //!
 //! # Degenerate configurations
 //!
@@ -93,26 +117,30 @@
 //!
 //! # Tests
 //!
-//! Against [`super::integrate_pair`] for all 25 face-type pairs and every valid scheme on tilted,
+//! Against the dual-number formulation of level 2 (`dual_reference`): values bit for bit,
+//! derivatives to 1e-13 of the largest (bit for bit in fact). Against [`super::integrate_pair`] for all 25 face-type pairs and every valid scheme on tilted,
 //! curved, perturbed, partially overlapping faces: the values (1e-13 of the largest weight) and
 //! the derivatives against central finite differences; the momentum identity
 //! `sum_b dn1_kb = sum_c dn2_kc`; frame indifference (zero derivative along rigid translations
 //! and rotations of both faces); finite output on degenerate input (coincident faces, a vertex
 //! exactly on an edge, slivers, NaN coordinates).
 
+#[cfg(test)]
+mod dual_reference;
+
 use nalgebra::DMatrix;
 use num_dual::DualSVec64;
 
 use super::clip::{area_centroid_at, VertexOrigin};
 use super::pair::{
-    det2, diameter, is_finite_face, overlap_of_sub_pair, primary_subs, solve2, triangle_local,
-    Bilinear, FaceGeom, IntegrationOptions, LocalPoint, Overlap, PairFailure, Plane, Projected,
-    RejectStats, SubPairOutcome,
+    det2, diameter, is_finite_face, overlap_of_sub_pair, primary_subs, solve2, Bilinear, FaceGeom,
+    IntegrationOptions, LocalPoint, Overlap, PairFailure, Plane, Projected, RejectStats,
+    SubPairOutcome,
 };
 use super::segments::{
     sub_segments, traction_node_count, traction_shape_on_at, SubSegment, TractionScheme,
 };
-use crate::fe::shape::cross_at;
+use crate::fe::shape::{cross_at, TensorShape};
 use crate::fe::{FaceType, Rule2};
 
 /// Mortar weights of one face pair, dense, with their derivatives.
@@ -184,13 +212,25 @@ pub fn integrate_pair_linearized(
         pri.kind.num_nodes(),
         "integrate_pair_linearized: primary"
     );
+    linearized_with(sec, pri, opts, stats, Kernel::integrate_overlap)
+}
+
+/// [`integrate_pair_linearized`] with the given level 2 (the float one, or in the tests the
+/// dual-number reference).
+fn linearized_with<'a>(
+    sec: &'a FaceGeom<'a>,
+    pri: &'a FaceGeom<'a>,
+    opts: &IntegrationOptions,
+    stats: &mut RejectStats,
+    level2: Level2<'a>,
+) -> LinearizedWeights {
     let (ns, np) = (sec.kind.num_nodes(), pri.kind.num_nodes());
     let mut out = LinearizedWeights::zeros(traction_node_count(sec.kind, opts.scheme), ns, np);
     if !is_finite_face(sec) || !is_finite_face(pri) {
         stats.non_finite += 1;
         return out;
     }
-    let kernel = Kernel::new(sec, pri, opts);
+    let kernel = Kernel::new(sec, pri, opts, level2);
     if ns + np <= 8 {
         kernel.run::<24>(&mut out, stats);
     } else {
@@ -277,15 +317,26 @@ struct Kernel<'a> {
     pri: &'a FaceGeom<'a>,
     scheme: TractionScheme,
     rule: Rule2,
+    level2: Level2<'a>,
 }
 
+/// The level 2 of one overlapping sub-segment pair: [`Kernel::integrate_overlap`] (in the tests
+/// also `dual_reference::integrate_overlap`, which it must reproduce bit for bit).
+type Level2<'a> = fn(&Kernel<'a>, &Overlap, &mut SubPairTangent) -> Result<(), PairFailure>;
+
 impl<'a> Kernel<'a> {
-    fn new(sec: &'a FaceGeom<'a>, pri: &'a FaceGeom<'a>, opts: &IntegrationOptions) -> Self {
+    fn new(
+        sec: &'a FaceGeom<'a>,
+        pri: &'a FaceGeom<'a>,
+        opts: &IntegrationOptions,
+        level2: Level2<'a>,
+    ) -> Self {
         Kernel {
             sec,
             pri,
             scheme: opts.scheme,
             rule: FaceType::Tri3.quadrature(opts.degree),
+            level2,
         }
     }
 
@@ -340,7 +391,7 @@ impl<'a> Kernel<'a> {
         out: &mut LinearizedWeights,
     ) -> SubPairOutcome {
         tangent.clear();
-        match self.integrate_overlap(overlap, tangent) {
+        match (self.level2)(self, overlap, tangent) {
             Ok(()) => {
                 let chain = plane_chain(vertices[0], vertices[1], out.ndof());
                 tangent.merge_into(out, &chain)
@@ -450,112 +501,136 @@ impl<'a> Kernel<'a> {
         let ns = sec.x.len();
         let mut values = PointValues::default();
         let xi_s = at.xi_s.map(|v| v.re);
-        let (mut n, mut dn, mut ddn) = (
-            [0.0; MAX_NODES],
-            [[0.0; 2]; MAX_NODES],
-            [[0.0; 3]; MAX_NODES],
-        );
-        shape_with_hessian(sec.kind, xi_s, &mut n[..ns], &mut dn[..ns], &mut ddn[..ns]);
+        let mut shapes = [TensorShape::default(); MAX_NODES];
+        shape_derivatives(sec.kind, xi_s, &mut shapes[..ns]);
         let mut dj_dx = [0.0; MAX_SEC_DOFS];
-        let face_jacobian = face_jacobian(sec.x, &dn[..ns], &ddn[..ns], &mut dj_dx);
-        for ((t, re), d) in values.n1.iter_mut().zip(&n[..ns]).zip(&dn[..ns]) {
-            *t = OfParent { re: *re, d: *d };
+        let face_jacobian = face_jacobian(sec.x, &shapes[..ns], &mut dj_dx);
+        for (t, shape) in values.n1.iter_mut().zip(&shapes[..ns]) {
+            *t = OfParent {
+                re: shape.value,
+                d: shape.value_derivative,
+            };
         }
-        let s_parent = parent_seed(xi_s);
         match self.scheme {
             TractionScheme::FaceShape => values.phi = values.n1,
-            // The corner functions are the linear face's: values and gradients in floats.
+            // The corner functions are the linear face's.
             TractionScheme::Corners => {
                 let linear = if sec.kind.is_quad() {
                     FaceType::Quad4
                 } else {
                     FaceType::Tri3
                 };
-                float_shape(linear, at.xi_s.map(|v| v.re), &mut values.phi);
+                shape_values_at(linear, xi_s, &mut values.phi);
             }
             TractionScheme::PiecewiseLinear => {
-                traction_shape_on_at(sec.kind, self.scheme, at.seg, s_parent, phi_scratch);
+                traction_shape_on_at(
+                    sec.kind,
+                    self.scheme,
+                    at.seg,
+                    parent_seed(xi_s),
+                    phi_scratch,
+                );
                 OfParent::fill(&mut values.phi, phi_scratch);
             }
         }
-        float_shape(pri.kind, at.xi_m.map(|v| v.re), &mut values.n2);
+        shape_values_at(pri.kind, at.xi_m.map(|v| v.re), &mut values.n2);
         (values, face_jacobian, dj_dx)
     }
 }
 
-/// The shape functions of `kind` at `xi` with their `xi`-derivatives, in floats (no second
-/// derivatives needed), into the first `kind.num_nodes()` entries of `to`.
-fn float_shape(kind: FaceType, xi: [f64; 2], to: &mut [OfParent]) {
+/// The shape functions of `kind` at `xi` with their `xi`-derivatives, as a `ParentDual`
+/// evaluation gives them (in floats on Quad4 and Quad9), into the first `kind.num_nodes()`
+/// entries of `to`.
+fn shape_values_at(kind: FaceType, xi: [f64; 2], to: &mut [OfParent]) {
     let nn = kind.num_nodes();
-    let (mut n, mut dn) = ([0.0; MAX_NODES], [[0.0; 2]; MAX_NODES]);
-    kind.shape_and_grad_at(xi, &mut n[..nn], &mut dn[..nn]);
-    for ((t, re), d) in to.iter_mut().zip(&n[..nn]).zip(&dn[..nn]) {
-        *t = OfParent { re: *re, d: *d };
+    let mut shapes = [TensorShape::default(); MAX_NODES];
+    if kind.tensor_shape_derivatives(xi, &mut shapes[..nn]) {
+        for (t, shape) in to.iter_mut().zip(&shapes[..nn]) {
+            *t = OfParent {
+                re: shape.value,
+                d: shape.value_derivative,
+            };
+        }
+    } else {
+        let mut n = [ParentDual::from_re(0.0); MAX_NODES];
+        kind.shape_at(parent_seed(xi), &mut n[..nn]);
+        OfParent::fill(to, &n[..nn]);
     }
 }
 
-/// The shape functions of the secondary face at `xi`: values, gradients and second derivatives
-/// `[N_,xixi, N_,xieta, N_,etaeta]` (for the `xi`-derivatives of `J_face`), in floats on Quad4
-/// and Quad9, from the generic kernels in `ParentDual` numbers on the other faces.
-fn shape_with_hessian(
-    kind: FaceType,
-    xi: [f64; 2],
-    n: &mut [f64],
-    dn: &mut [[f64; 2]],
-    ddn: &mut [[f64; 3]],
-) {
-    if kind.tensor_shape_with_hessian(xi, n, dn, ddn) {
+/// The shape functions of the secondary face at `xi` with their first and second derivatives
+/// (for `J_face` and its `xi`-derivatives): [`FaceType::tensor_shape_derivatives`] on Quad4 and
+/// Quad9, the generic kernels in `ParentDual` numbers on the other faces (the same numbers).
+fn shape_derivatives(kind: FaceType, xi: [f64; 2], out: &mut [TensorShape]) {
+    if kind.tensor_shape_derivatives(xi, out) {
         return;
     }
     let nn = kind.num_nodes();
     let zero = ParentDual::from_re(0.0);
     let (mut nd, mut dnd) = ([zero; MAX_NODES], [[zero; 2]; MAX_NODES]);
     kind.shape_and_grad_at(parent_seed(xi), &mut nd[..nn], &mut dnd[..nn]);
-    for a in 0..nn {
-        let (g0, g1) = (slots(&dnd[a][0]), slots(&dnd[a][1]));
-        n[a] = nd[a].re;
-        dn[a] = [dnd[a][0].re, dnd[a][1].re];
-        ddn[a] = [g0[0], g0[1], g1[1]];
+    for (o, (n, g)) in out.iter_mut().zip(nd.iter().zip(&dnd)) {
+        *o = TensorShape {
+            value: n.re,
+            value_derivative: slots(n),
+            gradient: [g[0].re, g[1].re],
+            gradient_derivative: [slots(&g[0]), slots(&g[1])],
+        };
     }
 }
 
 /// The surface Jacobian `J_face = |x_,xi x x_,eta|` of a face with node coordinates `x` from
-/// its shape-function gradients `dn` and second derivatives `ddn` at a point, with its
-/// `xi`-derivatives `dJ/dxi_j = (c / J) . (t_1,j x t_2 + t_1 x t_2,j)` (`c = t_1 x t_2`,
-/// `t_i,j = sum_a N_a,ij x_a`), and `dJ_face/dx_a` (node `a`, axis `d` at `3 a + d`) into
-/// `dj_dx`.
+/// its shape functions at a point, with its `xi`-derivatives, and `dJ_face/dx_a` (node `a`,
+/// axis `d` at `3 a + d`) into `dj_dx`.
+///
+/// The `xi`-derivatives are those of `ParentDual` arithmetic on the tangents
+/// `t_i = sum_a N_a,i x_a` (with `dt_i/dxi_j = sum_a N_a,ij x_a`), written out in its order of
+/// operations: the product rule in `c = t_1 x t_2` and `c . c`, and `d sqrt(s) = ds sqrt(s)
+/// (1 / s) / 2`.
 fn face_jacobian(
     x: &[[f64; 3]],
-    dn: &[[f64; 2]],
-    ddn: &[[f64; 3]],
+    shapes: &[TensorShape],
     dj_dx: &mut [f64; MAX_SEC_DOFS],
 ) -> OfParent {
-    // t[i] = x_,i; dt[j][i] = x_,ij.
+    // t[i] = x_,i with its derivatives dt[i][d][j] = x_,ij.
     let mut t = [[0.0; 3]; 2];
-    let mut dt = [[[0.0; 3]; 2]; 2];
-    for ((xa, ga), ha) in x.iter().zip(dn).zip(ddn) {
-        let h = [[ha[0], ha[1]], [ha[1], ha[2]]];
-        for d in 0..3 {
-            for i in 0..2 {
-                t[i][d] += ga[i] * xa[d];
+    let mut dt = [[[0.0; 2]; 3]; 2];
+    for (xa, shape) in x.iter().zip(shapes) {
+        for i in 0..2 {
+            let (g, h) = (shape.gradient[i], shape.gradient_derivative[i]);
+            for d in 0..3 {
+                t[i][d] += g * xa[d];
                 for j in 0..2 {
-                    dt[j][i][d] += h[i][j] * xa[d];
+                    dt[i][d][j] += h[j] * xa[d];
                 }
             }
         }
     }
     let c = cross_at(t[0], t[1]);
-    let jacobian = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
-    let d = dt.map(|dtj| {
-        let dc = [cross_at(dtj[0], t[1]), cross_at(t[0], dtj[1])];
-        (0..3).map(|k| c[k] * (dc[0][k] + dc[1][k])).sum::<f64>() / jacobian
+    // d(a b - e f) = (da b + db a) - (de f + df e), as in cross_at.
+    let product_difference = |(a, b): (usize, usize), (e, f): (usize, usize), j: usize| {
+        (dt[0][a][j] * t[1][b] + dt[1][b][j] * t[0][a])
+            - (dt[0][e][j] * t[1][f] + dt[1][f][j] * t[0][e])
+    };
+    let dc: [[f64; 2]; 3] = [
+        std::array::from_fn(|j| product_difference((1, 2), (2, 1), j)),
+        std::array::from_fn(|j| product_difference((2, 0), (0, 2), j)),
+        std::array::from_fn(|j| product_difference((0, 1), (1, 0), j)),
+    ];
+    let squares = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
+    let jacobian = squares.sqrt();
+    let slope = jacobian * (1.0 / squares) * 0.5;
+    let d = std::array::from_fn(|j| {
+        let square = |k: usize| dc[k][j] * c[k] + dc[k][j] * c[k];
+        (square(0) + square(1) + square(2)) * slope
     });
     dj_dx.fill(0.0);
     if jacobian > 0.0 {
         // dJ = (t2 x n) . dt1 + (n x t1) . dt2, dt_i = sum_a N_a,i dx_a.
         let n = c.map(|v| v / jacobian);
         let (h1, h2) = (cross_at(t[1], n), cross_at(n, t[0]));
-        for (a, g) in dn.iter().enumerate() {
+        for (a, shape) in shapes.iter().enumerate() {
+            let g = shape.gradient;
             for d in 0..3 {
                 dj_dx[3 * a + d] = h1[d] * g[0] + h2[d] * g[1];
             }
@@ -601,16 +676,20 @@ fn plane_chain<const N: usize>(
 /// along the level-2 slots, as plain floats.
 ///
 /// The level-2 work per quadrature point is done on these, with the derivatives written out
-/// (the chain rule by hand), rather than in `PlaneDual`: the value of every quantity is computed
-/// by the very float operations of the dual code (so of `integrate_pair`), and the derivatives
-/// are those of the module docs:
+/// (the chain rule by hand), rather than in `PlaneDual`. Every operation, values and
+/// derivatives, is the one `PlaneDual` arithmetic would do, in its order (`x / y` is
+/// `x * (1 / y)` with derivative `(dx y - dy x) (1 / y) (1 / y)`, `x y` has `dx y + dy x`, ...),
+/// so the results are bit for bit those of the dual code (module docs, "Exactness"). The
+/// derivatives are those of the module docs:
 ///
 /// - the point `P = c + q_0 u + q_1 v` of a pallet (centroid `c`, edges `u`, `v` from it):
 ///   `dP = dc + q_0 du + q_1 dv`;
-/// - its local coordinates on a projected sub-segment with vertices `Q_i` (triangle or bilinear
-///   quadrilateral, `P(local) = sum_i N_i(local) Q_i`), from `P(local) = P`:
-///   `dlocal = J^-1 (dP - sum_i N_i dQ_i)` with `J = dP/dlocal` at the float solution (for the
-///   quadrilateral this is the derivative of the one dual Newton step of the module docs);
+/// - its local coordinates on a projected sub-segment with vertices `Q_i`: on a triangle the
+///   barycentric coordinates `det [d b] / det [a b]`, `det [a d] / det [a b]` (`a`, `b` the
+///   edges from `Q_0`, `d = P - Q_0`) differentiated as quotients; on a bilinear quadrilateral
+///   (`P(local) = sum_i N_i(local) Q_i`) the derivative of the one Newton step of the module
+///   docs, `dlocal = J^-1 (dP - sum_i N_i dQ_i)` with `J = dP/dlocal` at the float solution and
+///   `N_i` in the monomial form of the bilinear map;
 /// - `xi = xi_0 + A local` (the sub-segment's affine map): `dxi = A dlocal`;
 /// - `det(dP/dlocal)`: constant on a triangle (a dual of the vertices), on a quadrilateral
 ///   `(a_0 + c_0 t)(b_1 + c_1 s) - (b_0 + c_0 s)(a_1 + c_1 t)`, differentiated through the
@@ -645,10 +724,27 @@ impl PlaneValue {
     /// `self / den`.
     fn over(&self, den: &PlaneValue) -> Self {
         let inverse = 1.0 / den.re;
-        let ratio = self.re * inverse;
         PlaneValue {
-            re: self.re / den.re,
-            d: std::array::from_fn(|k| (self.d[k] - ratio * den.d[k]) * inverse),
+            re: self.re * inverse,
+            d: std::array::from_fn(|k| {
+                (self.d[k] * den.re - den.d[k] * self.re) * inverse * inverse
+            }),
+        }
+    }
+
+    /// `self * other` (the product rule, in the order of the duals' operations).
+    fn times(&self, other: &PlaneValue) -> Self {
+        PlaneValue {
+            re: self.re * other.re,
+            d: std::array::from_fn(|k| self.d[k] * other.re + other.d[k] * self.re),
+        }
+    }
+
+    /// `self - other`.
+    fn minus(&self, other: &PlaneValue) -> Self {
+        PlaneValue {
+            re: self.re - other.re,
+            d: std::array::from_fn(|k| self.d[k] - other.d[k]),
         }
     }
 
@@ -663,6 +759,11 @@ impl PlaneValue {
             }),
         }
     }
+}
+
+/// `det [u v]` of two plane vectors (as [`det2`] in level-2 duals).
+fn plane_det2(u: &[PlaneValue; 2], v: &[PlaneValue; 2]) -> PlaneValue {
+    u[0].times(&v[1]).minus(&u[1].times(&v[0]))
 }
 
 /// The level-2 pallet: its centroid, the edges `u`, `v` from the centroid and `det [u v]`.
@@ -768,44 +869,76 @@ impl<'o> PlaneMap<'o> {
 
     /// Local coordinates of `p` given the float solution `found`: closed form on a triangle,
     /// one Newton step from `found` on a quadrilateral (see the module docs), with their
-    /// derivatives `J^-1 (dP - sum_i N_i dQ_i)`.
+    /// derivatives, rounded as the level-2 duals round them (see [`PlaneValue`]).
     fn local(&self, p: &[PlaneValue; 2], found: &LocalPoint) -> [PlaneValue; 2] {
+        match (&self.shape, self.projected.bilinear()) {
+            (&MapShape::Triangle(det), _) => self.triangle_local(p, &det),
+            (MapShape::Quad { .. }, Some(map)) => self.quad_local(map, p, found),
+            (MapShape::Quad { .. }, None) => unreachable!("a quadrilateral has its bilinear map"),
+        }
+    }
+
+    /// The barycentric coordinates `det [d b] / det`, `det [a d] / det` (`a = Q_1 - Q_0`,
+    /// `b = Q_2 - Q_0`, `d = P - Q_0`): the operations of `triangle_local` in level-2 duals.
+    fn triangle_local(&self, p: &[PlaneValue; 2], det: &PlaneValue) -> [PlaneValue; 2] {
         let q = &self.projected.vertices;
-        let p_float = [p[0].re, p[1].re];
-        let (local, j, n) = match self.projected.bilinear() {
-            None => {
-                let (local, _) = triangle_local(q, p_float);
-                let j = [
-                    [q[1][0] - q[0][0], q[2][0] - q[0][0]],
-                    [q[1][1] - q[0][1], q[2][1] - q[0][1]],
-                ];
-                let n = [1.0 - local[0] - local[1], local[0], local[1], 0.0];
-                (local, j, n)
-            }
-            Some(map) => {
-                let x = map.point(found.local);
-                let j = map.jacobian_re(found.local);
-                let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
-                let [d0, d1] = solve2(j, det, [x[0] - p_float[0], x[1] - p_float[1]]);
-                let local = [found.local[0] - d0, found.local[1] - d1];
-                let [s, t] = found.local;
-                let n = [
-                    0.25 * (1.0 - s) * (1.0 - t),
-                    0.25 * (1.0 + s) * (1.0 - t),
-                    0.25 * (1.0 + s) * (1.0 + t),
-                    0.25 * (1.0 - s) * (1.0 + t),
-                ];
-                (local, j, n)
-            }
+        // The edges have constant unit derivatives: a_i = +1 on vertex 1, -1 on vertex 0.
+        let edge = |to: usize| -> [PlaneValue; 2] {
+            std::array::from_fn(|axis| {
+                let mut e = PlaneValue {
+                    re: q[to][axis] - q[0][axis],
+                    d: [0.0; PLANE_SLOTS],
+                };
+                e.d[self.first + 2 * to + axis] = 1.0;
+                e.d[self.first + axis] = -1.0;
+                e
+            })
         };
-        // g = dP - sum_i N_i dQ_i, then J^-1 g.
+        let (a, b) = (edge(1), edge(2));
+        let d: [PlaneValue; 2] = std::array::from_fn(|axis| {
+            let mut e = PlaneValue {
+                re: p[axis].re - q[0][axis],
+                d: p[axis].d,
+            };
+            e.d[self.first + axis] -= 1.0;
+            e
+        });
+        [plane_det2(&d, &b), plane_det2(&a, &d)].map(|num| num.over(det))
+    }
+
+    /// One Newton step from `found`, `local = found - J^-1 (P(found) - p)` with the float
+    /// Jacobian `J`: the derivative `J^-1 (dp - dP(found))`, where `dP(found) / dQ_i` is the
+    /// bilinear function `N_i(found)` of vertex `i` evaluated in the monomial form of
+    /// [`Bilinear::point`], as the duals evaluate it.
+    fn quad_local(
+        &self,
+        map: &Bilinear,
+        p: &[PlaneValue; 2],
+        found: &LocalPoint,
+    ) -> [PlaneValue; 2] {
+        let p_float = [p[0].re, p[1].re];
+        let x = map.point(found.local);
+        let j = map.jacobian_re(found.local);
+        let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+        let [d0, d1] = solve2(j, det, [x[0] - p_float[0], x[1] - p_float[1]]);
+        let local = [found.local[0] - d0, found.local[1] - d1];
+        let [s, t] = found.local;
+        // The monomial coefficients' derivatives along vertex i's slots: p0 1/4, a, b, c +-1/4.
+        const SIGNS: [[f64; 3]; 4] = [
+            [-0.25, -0.25, 0.25],
+            [0.25, -0.25, -0.25],
+            [0.25, 0.25, 0.25],
+            [-0.25, 0.25, -0.25],
+        ];
+        let st = s * t;
+        // g = dp - dP(found), then J^-1 g.
         let mut g = [p[0].d, p[1].d];
-        for (i, ni) in n[..q.len()].iter().enumerate() {
+        for (i, [sa, sb, sc]) in SIGNS.iter().enumerate() {
+            let n = 0.25 + sa * s + sb * t + sc * st;
             for (axis, ga) in g.iter_mut().enumerate() {
-                ga[self.first + 2 * i + axis] -= ni;
+                ga[self.first + 2 * i + axis] -= n;
             }
         }
-        let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
         [
             PlaneValue {
                 re: local[0],
@@ -832,11 +965,11 @@ impl<'o> PlaneMap<'o> {
                 PlaneValue {
                     re: map.jacobian([s.re, t.re]),
                     d: std::array::from_fn(|k| {
-                        let dj00 = a[0][k] + c[0][k] * t.re + mc[0] * t.d[k];
-                        let dj11 = b[1][k] + c[1][k] * s.re + mc[1] * s.d[k];
-                        let dj01 = b[0][k] + c[0][k] * s.re + mc[0] * s.d[k];
-                        let dj10 = a[1][k] + c[1][k] * t.re + mc[1] * t.d[k];
-                        dj00 * j11 + j00 * dj11 - dj01 * j10 - j01 * dj10
+                        let dj00 = a[0][k] + (c[0][k] * t.re + t.d[k] * mc[0]);
+                        let dj11 = b[1][k] + (c[1][k] * s.re + s.d[k] * mc[1]);
+                        let dj01 = b[0][k] + (c[0][k] * s.re + s.d[k] * mc[0]);
+                        let dj10 = a[1][k] + (c[1][k] * t.re + t.d[k] * mc[1]);
+                        (dj00 * j11 + dj11 * j00) - (dj01 * j10 + dj10 * j01)
                     }),
                 }
             }
@@ -1314,6 +1447,275 @@ mod tests {
         FaceType::ALL
             .into_iter()
             .flat_map(|s| FaceType::ALL.into_iter().map(move |p| (s, p)))
+    }
+
+    /// The float level 2 against the dual reference on one pair: the same counts, the values
+    /// bit for bit, the derivatives to 1e-13 of the largest (in fact bit for bit too).
+    fn assert_reproduces_reference(
+        sec: (FaceType, &[Vec3]),
+        pri: (FaceType, &[Vec3]),
+        opts: &IntegrationOptions,
+        what: &str,
+    ) {
+        let (sg, pg) = (
+            FaceGeom {
+                kind: sec.0,
+                x: sec.1,
+            },
+            FaceGeom {
+                kind: pri.0,
+                x: pri.1,
+            },
+        );
+        let (mut s_float, mut s_dual) = (RejectStats::default(), RejectStats::default());
+        let float = integrate_pair_linearized(&sg, &pg, opts, &mut s_float);
+        let dual = linearized_with(
+            &sg,
+            &pg,
+            opts,
+            &mut s_dual,
+            dual_reference::integrate_overlap,
+        );
+        assert_eq!(s_float, s_dual, "{what}: counts");
+        assert_eq!(float.area.to_bits(), dual.area.to_bits(), "{what}: area");
+        assert_eq!(
+            float.unresolved_vertices, dual.unresolved_vertices,
+            "{what}"
+        );
+        for (name, a, b) in [("n1", &float.n1, &dual.n1), ("n2", &float.n2, &dual.n2)] {
+            for (i, (x, y)) in a.iter().zip(b).enumerate() {
+                assert_eq!(
+                    x.to_bits(),
+                    y.to_bits(),
+                    "{what}: {name}[{i}] {x:e} != {y:e}"
+                );
+            }
+        }
+        let (df, dd) = (
+            [&float.dn1[..], &float.dn2[..]],
+            [&dual.dn1[..], &dual.dn2[..]],
+        );
+        let scale = max_abs(dd[0]).max(max_abs(dd[1]));
+        let difference = max_difference(df[0], dd[0]).max(max_difference(df[1], dd[1]));
+        assert!(
+            difference <= 1e-13 * scale,
+            "{what}: derivatives differ by {difference:e} (largest {scale:e})"
+        );
+    }
+
+    /// Three pairs of the bending scene (`cases/bending`: Hex27 layers, Quad9 faces, scheme 2,
+    /// degree 8), secondary then primary nodes, face order: the undeformed pair at `x = 0`
+    /// (exactly touching, coincident edges at `y = 0, 1`: with the float level 2 rounding one
+    /// division differently, its weights differed in the last bit, which flipped the signs of
+    /// round-off gaps and the first step no longer converged); a pair of the first Newton
+    /// iterate; a pair late in the bending whose overlap has a vertex where nearly parallel
+    /// edges cross (`x = 7.51124` and `7.51122`): plane derivatives of 1e12 cancel, and a
+    /// different order of the same operations changed the derivatives by 5e-5 relative.
+    const BENDING_PAIRS: [[f64; 54]; 3] = [
+        [
+            0.0,
+            0.0,
+            1.0,
+            1.25,
+            0.0,
+            1.0,
+            1.25,
+            1.0,
+            1.0,
+            0.0,
+            1.0,
+            1.0,
+            0.625,
+            0.0,
+            1.0,
+            1.25,
+            0.5,
+            1.0,
+            0.625,
+            1.0,
+            1.0,
+            0.0,
+            0.5,
+            1.0,
+            0.625,
+            0.5,
+            1.0,
+            0.0,
+            0.0,
+            1.0,
+            0.0,
+            1.0,
+            1.0,
+            1.6666666666666665,
+            1.0,
+            1.0,
+            1.6666666666666665,
+            0.0,
+            1.0,
+            0.0,
+            0.5,
+            1.0,
+            0.8333333333333333,
+            1.0,
+            1.0,
+            1.6666666666666665,
+            0.5,
+            1.0,
+            0.8333333333333333,
+            0.0,
+            1.0,
+            0.8333333333333333,
+            0.5,
+            1.0,
+        ],
+        [
+            2.4995821184900553,
+            0.0,
+            0.9997766457851738,
+            3.7476983666222528,
+            0.0,
+            1.001145592226524,
+            3.747908671178117,
+            1.0,
+            1.0011778169595529,
+            2.4996333570308233,
+            1.0,
+            0.9997888810667629,
+            3.1238948846935743,
+            0.0,
+            1.0000585347834672,
+            3.747803518900185,
+            0.5000328594332102,
+            1.0011617045930383,
+            3.1239603722275655,
+            1.0,
+            1.000068980261321,
+            2.4996077377604395,
+            0.4999970347958154,
+            0.9997827634259684,
+            3.12392762846057,
+            0.4999989529323504,
+            1.000063757522394,
+            1.665436256498429,
+            0.0,
+            0.9998509532274821,
+            1.6657073138978975,
+            1.0,
+            0.9998613837645863,
+            3.3335054144694696,
+            1.0,
+            1.000246602350682,
+            3.3335468265207084,
+            0.0,
+            1.0002372151579992,
+            1.6655717851981633,
+            0.4999924372943439,
+            0.9998561684960342,
+            2.499154349094873,
+            1.0,
+            0.9997112889681756,
+            3.333526120495089,
+            0.4999934724811446,
+            1.0002419087543406,
+            2.499162949859735,
+            0.0,
+            0.9996986042691017,
+            2.499158649477304,
+            0.5000010084686364,
+            0.9997049466186387,
+        ],
+        [
+            7.511243814701613,
+            0.0,
+            2.0510031664462645,
+            8.755208367328038,
+            0.0,
+            2.288075599570319,
+            8.75520837555786,
+            1.0,
+            2.28807559303152,
+            7.51124376999247,
+            1.0,
+            2.0510031768339263,
+            8.133296617246586,
+            0.0,
+            2.169511107591984,
+            8.755208371430433,
+            0.49999999459881106,
+            2.288075596279586,
+            8.133296599407045,
+            1.0,
+            2.169511112480069,
+            7.511243792348219,
+            0.5000000210713396,
+            2.0510031716355575,
+            8.133296608322649,
+            0.5000000133501024,
+            2.169511110040916,
+            6.681742245101922,
+            0.0,
+            1.8944101769563169,
+            6.681742074807264,
+            1.0,
+            1.8944102272340086,
+            8.340605670182246,
+            1.0,
+            2.2089661931503257,
+            8.34060566539637,
+            0.0,
+            2.2089661976757924,
+            6.681742159957448,
+            0.5000000852667351,
+            1.8944102020971931,
+            7.511224655514203,
+            1.0,
+            2.05101453787608,
+            8.340605667817163,
+            0.4999999937443363,
+            2.2089661954391135,
+            7.51122463393879,
+            0.0,
+            2.051014551296121,
+            7.5112246447251465,
+            0.49999998901017156,
+            2.0510145445852785,
+        ],
+    ];
+
+    /// Test 0. The float level 2 reproduces the dual-number reference ([`dual_reference`]):
+    /// values bit for bit, derivatives to 1e-13 of the largest, for every face-type pair and
+    /// valid scheme on generic configurations (also moved into one plane: touching faces) and
+    /// on the bending scene's pairs (with every scheme).
+    #[test]
+    fn float_level2_reproduces_the_dual_reference() {
+        for (st, pt) in all_type_pairs() {
+            for scheme in allowed_schemes(st) {
+                let opts = IntegrationOptions::for_faces(scheme, st, pt);
+                for seed in 0..2 {
+                    let (xs, xp) = generic_pair(st, pt, seed);
+                    let what = format!("{st:?}-{pt:?} scheme {} seed {seed}", scheme.number());
+                    assert_reproduces_reference((st, &xs), (pt, &xp), &opts, &what);
+                    let flat = |x: &[Vec3]| x.iter().map(|p| [p[0], p[1], 0.0]).collect::<Vec<_>>();
+                    let (fs, fp) = (flat(&xs), flat(&xp));
+                    let what = format!("{what}, flat");
+                    assert_reproduces_reference((st, &fs), (pt, &fp), &opts, &what);
+                }
+            }
+        }
+        for (i, pair) in BENDING_PAIRS.iter().enumerate() {
+            let x: Vec<Vec3> = pair.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
+            let (xs, xp) = x.split_at(9);
+            for scheme in SCHEMES {
+                let opts = IntegrationOptions { scheme, degree: 8 };
+                let what = format!("bending pair {i}, scheme {}", scheme.number());
+                assert_reproduces_reference(
+                    (FaceType::Quad9, xs),
+                    (FaceType::Quad9, xp),
+                    &opts,
+                    &what,
+                );
+            }
+        }
     }
 
     /// Test 1. The values equal `integrate_pair`'s (dense, 1e-13 of the largest weight), with the

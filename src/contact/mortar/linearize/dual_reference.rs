@@ -1,0 +1,206 @@
+//! The level 2 of [`super`] in `PlaneDual` numbers (16-slot forward mode, the formulation of the
+//! kernel before its level 2 was written out in floats): the reference the float level 2 must
+//! reproduce **bit for bit** (test `float_level2_reproduces_the_dual_reference`).
+//!
+//! The nonlinear solves are sensitive to the last bit of the weights: on the bending scene
+//! (`cases/bending`) the layers touch exactly in the undeformed state, the weighted gaps are
+//! round-off (`+-1e-16`), and their signs decide which nodes get a pressure and so a friction
+//! state at the first tangent; a weight that differed in its last bit (a float `a / b` for the
+//! duals' `a * (1 / b)`) changed that decision and the first load step no longer converged.
+//! Where a derivative is ill-conditioned (overlap vertices that are crossings of nearly parallel
+//! edges, with plane derivatives of `1e12` that cancel in the sum) a different order of the
+//! same operations changes it by `1e-5` relative. So the float code does the duals' operations
+//! in the duals' order, and this module keeps the duals to check it.
+
+use num_dual::DualNum;
+
+use super::*;
+
+/// [`Kernel::integrate_overlap`] in level-2 duals.
+pub(super) fn integrate_overlap(
+    kernel: &Kernel,
+    overlap: &Overlap,
+    tangent: &mut SubPairTangent,
+) -> Result<(), PairFailure> {
+    let s_map = PlaneMap::new(&overlap.s, 0);
+    let m_map = PlaneMap::new(&overlap.m, PRIMARY_SLOT);
+    let (polygon, unresolved) = traced_polygon(overlap, &s_map, &m_map);
+    tangent.unresolved += unresolved;
+    let (s_dual, m_dual) = (DualMap::new(&s_map), DualMap::new(&m_map));
+    let sec_jacobian = overlap.s.seg.parent_jacobian();
+    let centroid = area_centroid_at(&polygon);
+    for i in 0..polygon.len() {
+        let (a, b) = (polygon[i], polygon[(i + 1) % polygon.len()]);
+        let u = [a[0] - centroid[0], a[1] - centroid[1]];
+        let v = [b[0] - centroid[0], b[1] - centroid[1]];
+        let twice_area = det2(u, v);
+        if twice_area.re <= 0.0 {
+            continue;
+        }
+        for (point, (q, w)) in kernel
+            .rule
+            .points
+            .iter()
+            .zip(&kernel.rule.weights)
+            .enumerate()
+        {
+            let p = [
+                centroid[0] + u[0] * q[0] + v[0] * q[1],
+                centroid[1] + u[1] * q[0] + v[1] * q[1],
+            ];
+            let p_float = [p[0].re, p[1].re];
+            let on_s = overlap.s.invert(p_float).ok_or(PairFailure::InverseMap)?;
+            let on_m = overlap.m.invert(p_float).ok_or(PairFailure::InverseMap)?;
+            let local_s = s_dual.local(p, &on_s);
+            let local_m = m_dual.local(p, &on_m);
+            let xi_s = overlap.s.seg.to_parent_at(local_s);
+            let xi_m = overlap.m.seg.to_parent_at(local_m);
+            let measure = twice_area * (w * sec_jacobian) / s_dual.jacobian(local_s);
+            add_point(kernel, overlap.s.seg, xi_s, xi_m, measure, point, tangent)?;
+        }
+        tangent.add_pallet();
+    }
+    if tangent.is_finite() {
+        Ok(())
+    } else {
+        Err(PairFailure::NonFinite)
+    }
+}
+
+/// [`Kernel::add_point`] in level-2 duals.
+fn add_point(
+    kernel: &Kernel,
+    seg: &SubSegment,
+    xi_s: [PlaneDual; 2],
+    xi_m: [PlaneDual; 2],
+    measure: PlaneDual,
+    point: usize,
+    tangent: &mut SubPairTangent,
+) -> Result<(), PairFailure> {
+    let (sec, pri) = (kernel.sec, kernel.pri);
+    let (ns, np) = (sec.x.len(), pri.x.len());
+    let zero = ParentDual::from_re(0.0);
+    let (mut n, mut dn) = ([zero; MAX_NODES], [[zero; 2]; MAX_NODES]);
+    let mut values = PointValues::default();
+    let s_parent = parent_seed(xi_s.map(|v| v.re));
+    sec.kind
+        .shape_and_grad_at(s_parent, &mut n[..ns], &mut dn[..ns]);
+    let mut dweight_dx = [0.0; MAX_SEC_DOFS];
+    let face_jacobian = face_jacobian(sec.x, &dn[..ns], &mut dweight_dx);
+    OfParent::fill(&mut values.n1, &n[..ns]);
+    if kernel.scheme == TractionScheme::FaceShape {
+        values.phi = values.n1;
+    } else {
+        traction_shape_on_at(
+            sec.kind,
+            kernel.scheme,
+            seg,
+            s_parent,
+            &mut tangent.phi_scratch,
+        );
+        OfParent::fill(&mut values.phi, &tangent.phi_scratch);
+    }
+    pri.kind
+        .shape_at(parent_seed(xi_m.map(|v| v.re)), &mut n[..np]);
+    OfParent::fill(&mut values.n2, &n[..np]);
+    let weight = measure * lift(&face_jacobian, &xi_s);
+    let ratio = if face_jacobian.re > 0.0 {
+        weight.re / face_jacobian.re
+    } else {
+        0.0
+    };
+    dweight_dx.iter_mut().for_each(|g| *g *= ratio);
+    values.weight = weight.re;
+    if !values.is_finite() {
+        return Err(PairFailure::NonFinite);
+    }
+    let at = PointGeometry {
+        seg,
+        xi_s: xi_s.map(|x| PlaneValue::of(&x)),
+        xi_m: xi_m.map(|x| PlaneValue::of(&x)),
+        measure: PlaneValue::of(&measure),
+    };
+    let weight = PlaneValue::of(&weight);
+    tangent.tabulate(point, &values, &at, &weight, &dweight_dx[..3 * ns]);
+    Ok(())
+}
+
+/// `f(xi(P))` with `f` given with its `xi`-derivatives and `xi` with its `P`-derivatives.
+fn lift(f: &ParentDual, xi: &[PlaneDual; 2]) -> PlaneDual {
+    match &f.eps.0 {
+        None => PlaneDual::from_re(f.re),
+        Some(g) => PlaneDual::new(f.re, xi[0].eps * g[0] + xi[1].eps * g[1]),
+    }
+}
+
+/// [`face_jacobian`] from the shape-function gradients in `ParentDual` numbers.
+fn face_jacobian(
+    x: &[[f64; 3]],
+    dn: &[[ParentDual; 2]],
+    dj_dx: &mut [f64; MAX_SEC_DOFS],
+) -> ParentDual {
+    let mut t = [[ParentDual::from_re(0.0); 3]; 2];
+    for (xa, ga) in x.iter().zip(dn) {
+        for (ti, gi) in t.iter_mut().zip(ga) {
+            for d in 0..3 {
+                ti[d] += *gi * xa[d];
+            }
+        }
+    }
+    let c = cross_at(t[0], t[1]);
+    let jacobian = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
+    dj_dx.fill(0.0);
+    if jacobian.re > 0.0 {
+        let n = c.map(|v| v.re / jacobian.re);
+        let [t1, t2] = t.map(|ti| ti.map(|v| v.re));
+        let (h1, h2) = (cross_at(t2, n), cross_at(n, t1));
+        for (a, g) in dn.iter().enumerate() {
+            for d in 0..3 {
+                dj_dx[3 * a + d] = h1[d] * g[0].re + h2[d] * g[1].re;
+            }
+        }
+    }
+    jacobian
+}
+
+/// A projected sub-segment in level-2 duals, with the bilinear map of a quadrilateral.
+struct DualMap {
+    vertices: Vec<[PlaneDual; 2]>,
+    bilinear: Option<Bilinear<PlaneDual>>,
+}
+
+impl DualMap {
+    fn new(map: &PlaneMap) -> Self {
+        let vertices = map.vertices[..map.projected.vertices.len()].to_vec();
+        let bilinear = (vertices.len() == 4).then(|| Bilinear::new(&vertices));
+        DualMap { vertices, bilinear }
+    }
+
+    /// Closed form on a triangle, one Newton step from `found` on a quadrilateral.
+    fn local(&self, p: [PlaneDual; 2], found: &LocalPoint) -> [PlaneDual; 2] {
+        match &self.bilinear {
+            None => super::super::pair::triangle_local(&self.vertices[..3], p).0,
+            Some(map) => {
+                let x = map.point(found.local);
+                let j = map.jacobian_re(found.local);
+                let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+                let [d0, d1] = solve2(j, det, [x[0] - p[0], x[1] - p[1]]);
+                [-d0 + found.local[0], -d1 + found.local[1]]
+            }
+        }
+    }
+
+    /// `det(dP/dlocal)` at `local`.
+    fn jacobian(&self, local: [PlaneDual; 2]) -> PlaneDual {
+        match &self.bilinear {
+            None => {
+                let q = &self.vertices;
+                det2(
+                    [q[1][0] - q[0][0], q[1][1] - q[0][1]],
+                    [q[2][0] - q[0][0], q[2][1] - q[0][1]],
+                )
+            }
+            Some(map) => map.jacobian(local),
+        }
+    }
+}
