@@ -112,7 +112,8 @@
 //! - Without `[curves]` (the metric is an error): `pareto.png`, `pareto.svg`, the metric
 //!   against wall time on log-log axes, every converged run a point, its **Pareto front**
 //!   ringed: the runs that no other run beats in both (no more time and no larger
-//!   error, one of them strictly; [`pareto_front`]). The summary gets
+//!   error, one of them strictly; errors at or below the study's `error_floor` count as
+//!   equal; [`pareto_front`]). The summary gets
 //!   `on_front_<variant>_<level>` (1 or 0) and, for the default variant (the first with no
 //!   edits: the case file as it is), `default_on_front`, the share of its runs on the front;
 //!   the closing line says it.
@@ -147,8 +148,10 @@ pub struct StudyFile {
     /// The base scene: a case file, relative to the study file.
     pub case: String,
     /// The metric of the runs' `summary.json` measured against h (`energy_error` for the Lamé
-    /// sphere).
-    pub metric: String,
+    /// sphere), or a list of metrics whose largest absolute value is the run's error (a patch
+    /// test measures both the stress and the penetration: `["max_rel_stress_error",
+    /// "max_rel_penetration_blocks"]`, named `max(max_rel_stress_error, ...)` in the outputs).
+    pub metric: MetricSpec,
     /// Plot title (of both plots). Default: `<scene name>: <metric>` for the convergence plot,
     /// `<scene name>: <y label>` for the curves.
     pub title: Option<String>,
@@ -162,11 +165,34 @@ pub struct StudyFile {
     /// Curves of the runs' load histories to plot and compare between variants (see the module
     /// docs). Default: none.
     pub curves: Option<CurvesSpec>,
+    /// Errors at or below this value count as equal on the Pareto front (round-off: a patch
+    /// test's runs are all exact, and the fastest of them is the one to pick). Finite, >= 0.
+    /// Default 0.
+    #[serde(default)]
+    pub error_floor: f64,
     /// Checks on the study's summary metrics (`slope_* >= 1.9`; see `crate::expect`): printed
     /// with their measured values after the study, which fails when one does not hold.
     /// Default: none.
     #[serde(default)]
     pub expect: Vec<String>,
+}
+
+/// The study's `metric`: one name, or several whose largest absolute value is the error.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(untagged)]
+pub enum MetricSpec {
+    One(String),
+    Largest(Vec<String>),
+}
+
+impl MetricSpec {
+    /// The metric names.
+    fn names(&self) -> Vec<String> {
+        match self {
+            MetricSpec::One(m) => vec![m.clone()],
+            MetricSpec::Largest(ms) => ms.clone(),
+        }
+    }
 }
 
 /// The `[curves]` table: one curve per variant, from the `history.csv` of its run at the last
@@ -255,7 +281,10 @@ pub struct Study {
     pub file: PathBuf,
     /// The base case file.
     pub case: PathBuf,
+    /// The error's name in the outputs: the metric, or `max(a, b, ...)`.
     pub metric: String,
+    /// The summary metrics whose largest absolute value is a run's error.
+    pub metric_parts: Vec<String>,
     pub title: String,
     pub refinements: Vec<RefinementSpec>,
     pub variants: Vec<VariantSpec>,
@@ -265,6 +294,8 @@ pub struct Study {
     pub petsc_options: Option<PathBuf>,
     /// The `[curves]` table, validated.
     pub curves: Option<Curves>,
+    /// Errors at or below this count as equal on the Pareto front (`error_floor`).
+    pub error_floor: f64,
     /// Checks on the study's metrics (`expect`).
     pub expectations: Vec<crate::expect::Expectation>,
 }
@@ -336,7 +367,8 @@ impl Study {
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_else(|| "study".into());
-        if file.metric.trim().is_empty() {
+        let metric_parts = file.metric.names();
+        if metric_parts.is_empty() || metric_parts.iter().any(|m| m.trim().is_empty()) {
             return Err(err("metric: empty".into()));
         }
         if file.curves.is_none() && file.refinement.len() < 2 {
@@ -344,6 +376,12 @@ impl Study {
                 "refinement: at least 2 are needed for a slope, found {} (a study with [curves] \
                  may have 1)",
                 file.refinement.len()
+            )));
+        }
+        if !(file.error_floor.is_finite() && file.error_floor >= 0.0) {
+            return Err(err(format!(
+                "error_floor = {}: must be finite and >= 0",
+                file.error_floor
             )));
         }
         if file.refinement.is_empty() {
@@ -463,12 +501,17 @@ impl Study {
             variant_options,
             file: path.to_path_buf(),
             case,
-            metric: file.metric.clone(),
+            metric: match metric_parts.as_slice() {
+                [one] => one.clone(),
+                many => format!("max({})", many.join(", ")),
+            },
+            metric_parts,
             title: String::new(),
             refinements: file.refinement,
             variants: file.variant,
             petsc_options: None,
             curves: None,
+            error_floor: file.error_floor,
             expectations: crate::expect::parse_all("expect", &file.expect).map_err(err)?,
         };
         // Every run's scene, built and dropped one at a time.
@@ -571,6 +614,17 @@ impl Study {
             petsc.size(),
             out.display()
         ));
+        if self.curves.is_none() {
+            // The first run of a process pays one-time costs (loading the solver libraries,
+            // first allocations) that would tilt the comparison of wall times against the
+            // first variant: an untimed run of the first variant's first level comes first.
+            let warm_up = out.join("runs").join("warm_up");
+            if let Some(Err(e)) = self.run_one(petsc, 0, 0, &warm_up)? {
+                if !e.is_collective() {
+                    return Err(e);
+                }
+            }
+        }
         let mut runs: Vec<RunRecord> = Vec::with_capacity(total);
         let mut summary = Summary::default();
         // The curves' columns, checked against the first history written.
@@ -584,23 +638,9 @@ impl Study {
                 }
                 reset_peak_memory();
                 let ranks = variant.ranks.unwrap_or(job_size);
-                let options = crate::petsc::options::Override::set(&self.variant_options[v])?;
                 let t0 = Instant::now();
-                // `None` on the ranks that wait while the variant runs on fewer.
-                let result = petsc.on_first_ranks(ranks, || {
-                    self.scene(v, level).and_then(|scene| {
-                        solver::run(
-                            &scene,
-                            petsc,
-                            &RunOptions {
-                                out_dir: run_dir.clone(),
-                                quiet: true,
-                            },
-                        )
-                    })
-                });
+                let result = self.run_one(petsc, v, level, &run_dir)?;
                 let seconds = t0.elapsed().as_secs_f64();
-                drop(options);
                 // Every rank takes part (-1: not available there).
                 let local = peak_memory_mb().unwrap_or(-1.0);
                 let mut most = 0.0f64;
@@ -629,17 +669,25 @@ impl Study {
                         record.message = s.message.clone();
                     }
                     Some(Ok(s)) => {
-                        let Some(&e) = s.metrics.get(&self.metric) else {
-                            return Err(Error::Case {
-                                file: self.file.clone(),
-                                msg: format!(
-                                    "metric = \"{}\": the runs do not report it (they report: {})",
-                                    self.metric,
-                                    s.metrics.keys().cloned().collect::<Vec<_>>().join(", ")
-                                ),
-                            });
-                        };
-                        record.error = Some(e);
+                        let mut error = 0.0f64;
+                        for part in &self.metric_parts {
+                            let Some(&e) = s.metrics.get(part) else {
+                                return Err(Error::Case {
+                                    file: self.file.clone(),
+                                    msg: format!(
+                                        "metric \"{part}\": the runs do not report it (they \
+                                         report: {})",
+                                        s.metrics.keys().cloned().collect::<Vec<_>>().join(", ")
+                                    ),
+                                });
+                            };
+                            error = if self.metric_parts.len() == 1 {
+                                e
+                            } else {
+                                error.max(e.abs())
+                            };
+                        }
+                        record.error = Some(error);
                         record.converged = true;
                         record.newton_its = s.steps.iter().map(|st| st.newton_its).sum();
                         record.augmentations = s.steps.iter().map(|st| st.augmentations).sum();
@@ -670,7 +718,7 @@ impl Study {
             }
         }
         if self.curves.is_none() {
-            for i in pareto_front(&runs) {
+            for i in pareto_front(&runs, self.error_floor) {
                 runs[i].on_front = true;
             }
         }
@@ -694,7 +742,7 @@ impl Study {
                     &self.metric,
                     &series,
                 )?;
-                warn(warnings);
+                plot::print_warnings(warnings);
                 let slopes: Vec<String> = self
                     .variants
                     .iter()
@@ -780,6 +828,32 @@ impl Study {
         Ok(StudyReport { runs, summary })
     }
 
+    /// Runs variant `v` at refinement `level` into `run_dir`, with the variant's PETSc options
+    /// and on its ranks: `None` on the ranks that wait while it runs on fewer. The error is the
+    /// run's (to record); `Err` only if the variant's options cannot be set.
+    fn run_one(
+        &self,
+        petsc: &Petsc,
+        v: usize,
+        level: usize,
+        run_dir: &Path,
+    ) -> Result<Option<Result<Summary>>> {
+        let ranks = self.variants[v].ranks.unwrap_or(petsc.size());
+        let _options = crate::petsc::options::Override::set(&self.variant_options[v])?;
+        Ok(petsc.on_first_ranks(ranks, || {
+            self.scene(v, level).and_then(|scene| {
+                solver::run(
+                    &scene,
+                    petsc,
+                    &RunOptions {
+                        out_dir: run_dir.to_path_buf(),
+                        quiet: true,
+                    },
+                )
+            })
+        }))
+    }
+
     /// Checks the `[curves]` columns against the `history.csv` in `run_dir` (rank 0), and
     /// shares the verdict with every rank: false if there is no history yet (the run failed
     /// before its first step), true if the columns are there; an error on every rank (naming the
@@ -848,7 +922,7 @@ impl Study {
                 }
             })
             .collect();
-        warn(plot::loglog_points(
+        plot::print_warnings(plot::loglog_points(
             &out.join("pareto"),
             &format!(
                 "{}: {} against wall time (ringed: Pareto front)",
@@ -946,7 +1020,7 @@ impl Study {
                 flagged,
             });
         }
-        warn(plot::lines(
+        plot::print_warnings(plot::lines(
             &out.join("curves"),
             &curves.title,
             &curves.x_label,
@@ -1138,13 +1212,6 @@ fn interpolate(curve: &[(f64, f64)], x: f64) -> Option<f64> {
     Some(a.1 + (x - a.0) / (b.0 - a.0) * (b.1 - a.1))
 }
 
-/// Prints plot warnings.
-fn warn(warnings: Vec<String>) {
-    for w in warnings {
-        eprintln!("mortar: warning: {w}");
-    }
-}
-
 /// The `(h, error)` points of a variant's converged runs.
 fn points_of(runs: &[RunRecord], variant: &str) -> Vec<(f64, f64)> {
     runs.iter()
@@ -1197,7 +1264,8 @@ fn study_csv(runs: &[RunRecord]) -> String {
          on_front\n",
     );
     for r in runs {
-        let error = r.error.map(|e| e.to_string()).unwrap_or_default();
+        // Exponent form: errors at round-off would print as 0.0000000000001767...
+        let error = r.error.map(|e| format!("{e:e}")).unwrap_or_default();
         let memory = r
             .peak_memory_mb
             .map(|m| format!("{m:.1}"))
@@ -1222,8 +1290,9 @@ fn study_csv(runs: &[RunRecord]) -> String {
 
 /// The runs on the Pareto front of error against wall time: converged runs with a finite
 /// error that no other such run beats in both (no more time and no larger error, one of them
-/// strictly). Indices into `runs`, ascending.
-pub fn pareto_front(runs: &[RunRecord]) -> Vec<usize> {
+/// strictly), errors at or below `error_floor` counting as equal. Indices into `runs`,
+/// ascending.
+pub fn pareto_front(runs: &[RunRecord], error_floor: f64) -> Vec<usize> {
     let points: Vec<(usize, f64, f64)> = runs
         .iter()
         .enumerate()
@@ -1231,7 +1300,7 @@ pub fn pareto_front(runs: &[RunRecord]) -> Vec<usize> {
         .filter_map(|(i, r)| {
             r.error
                 .filter(|e| e.is_finite())
-                .map(|e| (i, r.seconds, e.abs()))
+                .map(|e| (i, r.seconds, e.abs().max(error_floor)))
         })
         .collect();
     points
@@ -1416,8 +1485,10 @@ mod tests {
             run("failed", 0.1, None, false),
             run("middle", 3.0, Some(-1e-3), true),
         ];
-        assert_eq!(pareto_front(&runs), vec![0, 1, 5]);
-        assert!(pareto_front(&[]).is_empty());
+        assert_eq!(pareto_front(&runs, 0.0), vec![0, 1, 5]);
+        assert!(pareto_front(&[], 0.0).is_empty());
+        // Below the floor, errors are equal: the slow fine run is beaten by the fast one.
+        assert_eq!(pareto_front(&runs, 1e-2), vec![0]);
     }
 
     #[test]
@@ -1560,7 +1631,7 @@ count = 1
             study_csv(&[r, failed]),
             "variant,level,h,ranks,error,seconds,newton_its,converged,augmentations,\
              peak_memory_mb,on_front\n\
-             hex8,1,0.5,2,0.125,2.5,1,true,2,12.5,true\n\
+             hex8,1,0.5,2,1.25e-1,2.5,1,true,2,12.5,true\n\
              hex8,1,0.5,2,,2.5,1,false,2,,false\n"
         );
     }
