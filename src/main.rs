@@ -190,7 +190,10 @@ fn execute(cli: Cli, program: String) -> Result<()> {
             let out = out.unwrap_or_else(|| PathBuf::from("out/scaling"));
             mortar::io::plot::print_warnings(scaling.write(&out)?);
             print!("{}", scaling.table());
-            println!("mortar: scaling.csv, scaling.png and scaling.svg in {}", out.display());
+            println!(
+                "mortar: scaling.csv, scaling.png and scaling.svg in {}",
+                out.display()
+            );
             println!("speedup: {:.2}", scaling.speedup(scaling.runs.len() - 1));
             Ok(())
         }

@@ -78,10 +78,7 @@ impl Scaling {
             .iter()
             .find(|(name, _)| *name == phase)
             .map_or(&[][..], |p| p.1);
-        stages
-            .iter()
-            .filter_map(|s| self.runs[k].stage(s))
-            .sum()
+        stages.iter().filter_map(|s| self.runs[k].stage(s)).sum()
     }
 
     /// The overall speedup of run `k` over the first run (wall times).
@@ -119,7 +116,10 @@ impl Scaling {
                     .collect(),
             );
         }
-        row("total (wall)", self.runs.iter().map(|r| r.seconds).collect());
+        row(
+            "total (wall)",
+            self.runs.iter().map(|r| r.seconds).collect(),
+        );
         out
     }
 
@@ -201,7 +201,11 @@ mod tests {
                     10.0,
                     &[("Main Stage", 1.0), ("setup", 0.5), ("solve", 6.0)],
                 ),
-                run(2, 5.0, &[("Main Stage", 1.0), ("setup", 0.5), ("solve", 2.5)]),
+                run(
+                    2,
+                    5.0,
+                    &[("Main Stage", 1.0), ("setup", 0.5), ("solve", 2.5)],
+                ),
             ],
         };
         assert_eq!(s.phase_seconds(0, "start and setup"), 1.5);

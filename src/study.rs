@@ -109,14 +109,16 @@
 //!   refinements.
 //! - With `[curves]`: `curves.png`, `curves.svg`: y against x on linear axes, one line per
 //!   variant (its run at the last level), `title` as the title ([`crate::io::plot::lines`]).
-//! - Without `[curves]` (the metric is an error): `pareto.png`, `pareto.svg`, the metric
-//!   against wall time on log-log axes, every converged run a point, its **Pareto front**
-//!   ringed: the runs that no other run beats in both (no more time and no larger
-//!   error, one of them strictly; errors at or below the study's `error_floor` count as
-//!   equal; [`pareto_front`]). The summary gets
-//!   `on_front_<variant>_<level>` (1 or 0) and, for the default variant (the first with no
-//!   edits: the case file as it is), `default_on_front`, the share of its runs on the front;
-//!   the closing line says it.
+//! - `pareto.png`, `pareto.svg`: the error against wall time on log-log axes, every converged
+//!   run a point, its **Pareto front** ringed: the runs that no other run beats in both (no
+//!   more time and no larger error, one of them strictly; errors at or below the study's
+//!   `error_floor` count as equal; [`pareto_front`]). Without `[curves]` the error is the
+//!   metric; with `[curves]` (no exact solution: the reference variant is the truth) it is a
+//!   variant's `curve_max_rel_diff` at the last level, and the reference is not on the plot.
+//!   The summary gets `on_front_<variant>_<level>` (1 or 0) and, for the default variant (the
+//!   first with no edits, no `petsc` and no `ranks`: the case file as it is),
+//!   `default_on_front`, the share of its runs on the front; the closing line says it.
+//!   `study.csv`'s `on_front` column has the flags.
 //!
 //! A failed run (not converged, a bad PETSc option, ...) is recorded (`converged = false`, no
 //! point on the convergence plot) and the study goes on; when any failed, the study returns an
@@ -492,8 +494,12 @@ impl Study {
             .iter()
             .enumerate()
             .map(|(i, v)| {
-                crate::petsc::options::parse(v.petsc.as_deref().unwrap_or(""))
-                    .map_err(|m| err(format!("variant[{i}].petsc = \"{}\": {m}", v.petsc.as_deref().unwrap_or(""))))
+                crate::petsc::options::parse(v.petsc.as_deref().unwrap_or("")).map_err(|m| {
+                    err(format!(
+                        "variant[{i}].petsc = \"{}\": {m}",
+                        v.petsc.as_deref().unwrap_or("")
+                    ))
+                })
             })
             .collect::<Result<Vec<_>>>()?;
         let mut study = Study {
@@ -758,10 +764,20 @@ impl Study {
                 done.push(format!("slopes {}", slopes.join(", ")));
             }
             if self.curves.is_none() {
-                done.push(self.write_pareto(&runs, &mut summary, out)?);
+                done.push(self.write_pareto(&runs, &self.metric, &mut summary, out)?);
+                write_atomic(&out.join("study.csv"), study_csv(&runs).as_bytes())?;
             }
             if let Some(curves) = &self.curves {
                 let figures = self.write_curves(curves, out)?;
+                // The Pareto front of the curves' difference to the reference against time.
+                let mut scored = curve_scores(&runs, curves, &figures, self.refinements.len() - 1);
+                for i in pareto_front(&scored, self.error_floor) {
+                    runs[i].on_front = true;
+                    scored[i].on_front = true;
+                }
+                let label = format!("{} to {}", curves.metric, curves.reference);
+                done.push(self.write_pareto(&scored, &label, &mut summary, out)?);
+                write_atomic(&out.join("study.csv"), study_csv(&runs).as_bytes())?;
                 for (name, d) in &figures.differences {
                     if let Some(d) = d {
                         summary
@@ -899,6 +915,7 @@ impl Study {
     fn write_pareto(
         &self,
         runs: &[RunRecord],
+        metric: &str,
         summary: &mut Summary,
         out: &Path,
     ) -> Result<String> {
@@ -925,14 +942,13 @@ impl Study {
         plot::print_warnings(plot::loglog_points(
             &out.join("pareto"),
             &format!(
-                "{}: {} against wall time (ringed: Pareto front)",
-                self.name, self.metric
+                "{}: {metric} against wall time (ringed: Pareto front)",
+                self.name
             ),
             "wall time (s)",
-            &self.metric,
+            metric,
             &series,
         )?);
-        write_atomic(&out.join("study.csv"), study_csv(runs).as_bytes())?;
         for r in runs.iter().filter(|r| r.converged) {
             summary.metrics.insert(
                 format!("on_front_{}_{}", r.variant, r.level),
@@ -940,19 +956,13 @@ impl Study {
             );
         }
         let front = runs.iter().filter(|r| r.on_front).count();
-        let mut note = format!(
-            "Pareto front of {} against wall time: {front} run(s)",
-            self.metric
-        );
-        let default = self
-            .variants
-            .iter()
-            .find(|v| {
-                v.set.is_empty()
-                    && v.refinement_set.is_empty()
-                    && v.petsc.is_none()
-                    && v.ranks.is_none()
-            });
+        let mut note = format!("Pareto front of {metric} against wall time: {front} run(s)");
+        let default = self.variants.iter().find(|v| {
+            v.set.is_empty()
+                && v.refinement_set.is_empty()
+                && v.petsc.is_none()
+                && v.ranks.is_none()
+        });
         if let Some(d) = default {
             let mine: Vec<&RunRecord> = runs
                 .iter()
@@ -1233,6 +1243,33 @@ fn progress_line(metric: &str, r: &RunRecord) -> String {
         "  {} level {} h {:.4}: {result}, {} Newton its, {:.2} s",
         r.variant, r.level, r.h, r.newton_its, r.seconds
     )
+}
+
+/// The runs scored by their curves ([`Study::write_curves`]): at the last level, every variant
+/// but the reference has its curve's difference to the reference as its error (none when its
+/// curve has no overlap with the reference's); the reference (the truth of the comparison) and
+/// the other levels have none, so they are not on the Pareto front.
+fn curve_scores(
+    runs: &[RunRecord],
+    curves: &Curves,
+    figures: &CurveFigures,
+    last_level: usize,
+) -> Vec<RunRecord> {
+    runs.iter()
+        .map(|r| {
+            let difference = figures
+                .differences
+                .iter()
+                .find(|(name, _)| *name == r.variant)
+                .and_then(|(_, d)| *d)
+                .filter(|_| r.level == last_level && r.variant != curves.reference);
+            RunRecord {
+                error: difference,
+                converged: r.converged && difference.is_some(),
+                ..r.clone()
+            }
+        })
+        .collect()
 }
 
 /// Gives every rank rank 0's figures of a run (rank 0 runs every variant; the others may have

@@ -486,13 +486,16 @@ impl ContactInterfaces {
                     }
                     continue;
                 }
-                let candidates =
-                    timed
-                        .search
-                        .time(|| pass.candidates(&x, &pass.local_faces, EVAL_MARGIN));
+                let candidates = timed
+                    .search
+                    .time(|| pass.candidates(&x, &pass.local_faces, EVAL_MARGIN));
                 let integrated = timed.integration.time(|| {
-                    pass.normals(&x)
-                        .map(|normals| (normals, pass.integrate(&ctx, candidates, tangent, &mut stats)))
+                    pass.normals(&x).map(|normals| {
+                        (
+                            normals,
+                            pass.integrate(&ctx, candidates, tangent, &mut stats),
+                        )
+                    })
                 });
                 let (normals, pairs) = match integrated {
                     Ok(n) => n,

@@ -117,14 +117,19 @@ pub fn parse(text: &str) -> std::result::Result<Vec<(String, Option<String>)>, S
     let mut out: Vec<(String, Option<String>)> = Vec::new();
     for word in text.split_whitespace() {
         let is_name = word.starts_with('-')
-            && word[1..].chars().next().is_some_and(|c| c.is_ascii_alphabetic());
+            && word[1..]
+                .chars()
+                .next()
+                .is_some_and(|c| c.is_ascii_alphabetic());
         if is_name {
             out.push((word.to_string(), None));
         } else {
             match out.last_mut() {
                 Some((_, value @ None)) => *value = Some(word.to_string()),
                 Some((name, Some(_))) => {
-                    return Err(format!("'{word}' follows {name} and its value: not an option"))
+                    return Err(format!(
+                        "'{word}' follows {name} and its value: not an option"
+                    ))
                 }
                 None => return Err(format!("'{word}' is not an option (options start with -)")),
             }
