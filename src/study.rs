@@ -112,7 +112,8 @@
 //! - `pareto.png`, `pareto.svg`: the error against wall time on log-log axes, every converged
 //!   run a point, its **Pareto front** ringed: the runs that no other run beats in both (no
 //!   more time and no larger error, one of them strictly; errors at or below the study's
-//!   `error_floor` count as equal; [`pareto_front`]). Without `[curves]` the error is the
+//!   `error_floor` count as equal; [`pareto_front`]); variants with `reference_only = true`
+//!   are plotted but not candidates. Without `[curves]` the error is the
 //!   metric; with `[curves]` (no exact solution: the reference variant is the truth) it is a
 //!   variant's `curve_max_rel_diff` at the last level, and the reference is not on the plot.
 //!   The summary gets `on_front_<variant>_<level>` (1 or 0) and, for the default variant (the
@@ -262,6 +263,11 @@ pub struct VariantSpec {
     /// the study fail. Default false.
     #[serde(default)]
     pub may_fail: bool,
+    /// Shown for comparison but not a choice of the scene's settings (a conforming mesh where
+    /// the scene is about dissimilar ones): its runs are plotted but never on the Pareto front.
+    /// Default false.
+    #[serde(default)]
+    pub reference_only: bool,
     /// PETSc options of this variant's runs, written as on the command line
     /// (`"-ksp_type gmres -pc_type gamg"`): put into PETSc's options database for its runs
     /// only, over the options file and the command line, and restored after each run.
@@ -724,7 +730,7 @@ impl Study {
             }
         }
         if self.curves.is_none() {
-            for i in pareto_front(&runs, self.error_floor) {
+            for i in self.front(&runs) {
                 runs[i].on_front = true;
             }
         }
@@ -771,7 +777,7 @@ impl Study {
                 let figures = self.write_curves(curves, out)?;
                 // The Pareto front of the curves' difference to the reference against time.
                 let mut scored = curve_scores(&runs, curves, &figures, self.refinements.len() - 1);
-                for i in pareto_front(&scored, self.error_floor) {
+                for i in self.front(&scored) {
                     runs[i].on_front = true;
                     scored[i].on_front = true;
                 }
@@ -842,6 +848,25 @@ impl Study {
             )));
         }
         Ok(StudyReport { runs, summary })
+    }
+
+    /// The runs on the Pareto front ([`pareto_front`] with the study's `error_floor`), among
+    /// the runs of the variants that are choices (not `reference_only`).
+    fn front(&self, runs: &[RunRecord]) -> Vec<usize> {
+        let choices: Vec<RunRecord> = runs
+            .iter()
+            .map(|r| {
+                let reference = self
+                    .variants
+                    .iter()
+                    .any(|v| v.name == r.variant && v.reference_only);
+                RunRecord {
+                    converged: r.converged && !reference,
+                    ..r.clone()
+                }
+            })
+            .collect();
+        pareto_front(&choices, self.error_floor)
     }
 
     /// Runs variant `v` at refinement `level` into `run_dir`, with the variant's PETSc options
