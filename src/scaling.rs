@@ -100,7 +100,7 @@ impl Scaling {
         let mut row = |name: &str, seconds: Vec<f64>| {
             let _ = write!(out, "{name:<20}");
             for s in &seconds {
-                let _ = write!(out, "{s:>14.3}");
+                let _ = write!(out, "{s:>14.4}");
             }
             for s in &seconds[1..] {
                 let ratio = if *s > 0.0 { seconds[0] / s } else { f64::NAN };
