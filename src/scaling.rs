@@ -13,14 +13,19 @@
 //! | bulk assembly | `assembly` (the bulk elements, tied interfaces, PETSc's assembly) |
 //! | linear solve | `solve` (SNES: the linear solves, norms and updates) |
 //! | output | `output` |
-//! | start and setup | `Main Stage` (reading, meshing, partitioning) and `setup` |
+//! | start and setup | `Main Stage` (everything outside the other stages: PETSc's start, the
+//! partitioning, the dof numbering, the bulk work of the load-step predictor) and `setup` |
+//!
+//! The contact stages count every contact evaluation, the reactions of the output included
+//! (`summary.json` counts those of the Newton solves only). The case file is read and the mesh
+//! built before PETSc starts, so that serial part is in no stage and not in the wall times.
 //!
 //! The speedup of a phase on run `k` is its time on the first run over its time on run `k`
 //! (stage times are means over the ranks); the overall speedup is the ratio of the runs' wall
 //! times (`Time (sec)`, the maximum over the ranks). Outputs in `DIR` (default `out/scaling`):
 //! `scaling.csv` (`phase,ranks,seconds,speedup`, the overall time as phase `total`) and
-//! `scaling.png`/`.svg` (time against ranks on log-log axes, one line per phase, the total and
-//! the ideal `total_1 / ranks`).
+//! `scaling.png`/`.svg` (time against ranks on log-log axes: the total, the ideal
+//! `total_1 / ranks`, and the phases of `PLOTTED`).
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -103,8 +108,7 @@ impl Scaling {
                 let _ = write!(out, "{s:>14.4}");
             }
             for s in &seconds[1..] {
-                let ratio = if *s > 0.0 { seconds[0] / s } else { f64::NAN };
-                let _ = write!(out, "{ratio:>14.2}");
+                let _ = write!(out, "{:>14.2}", ratio(seconds[0], *s));
             }
             out.push('\n');
         };
@@ -129,7 +133,7 @@ impl Scaling {
         for (k, r) in self.runs.iter().enumerate() {
             for (phase, _) in PHASES {
                 let (first, mine) = (self.phase_seconds(0, phase), self.phase_seconds(k, phase));
-                let speedup = if mine > 0.0 { first / mine } else { f64::NAN };
+                let speedup = ratio(first, mine);
                 let _ = writeln!(out, "{phase},{},{mine},{speedup}", r.ranks);
             }
             let _ = writeln!(out, "total,{},{},{}", r.ranks, r.seconds, self.speedup(k));
@@ -177,6 +181,16 @@ impl Scaling {
             "wall time (s)",
             &series,
         )
+    }
+}
+
+/// A speedup: `before / after`, NaN when `after` is not positive (a phase the run did not
+/// have).
+fn ratio(before: f64, after: f64) -> f64 {
+    if after > 0.0 {
+        before / after
+    } else {
+        f64::NAN
     }
 }
 

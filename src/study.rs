@@ -66,7 +66,15 @@
 //! Before any run, every variant x refinement is built and validated (paths, case keys, mesh),
 //! so a mistake in the last variant is reported at once, not after the first runs. Every run
 //! shares one PETSc: its options are the base case's options file (no variant may change
-//! `petsc_options`) and the command line.
+//! `petsc_options`), the command line, and the variant's own `petsc` options, set for its runs
+//! only (options a variant sets that no PETSc object reads draw a warning naming the variant).
+//! A variant with `ranks = k` runs on the first k ranks of the job (a split communicator); the
+//! other ranks wait for it (OpenMPI's waiting polls, so on a machine with as many cores as
+//! ranks the waiting rank takes a little of the time measured).
+//!
+//! The first run of a process pays one-time costs (loading the solver libraries, first
+//! allocations): an untimed run of the first variant at the first level comes first, into
+//! `<out>/warm_up/`, unless that variant is the `[curves]` reference (not on the front).
 //!
 //! # Curves
 //!
@@ -92,8 +100,8 @@
 //!
 //! - `runs/<variant>/<level>/`: each run's own outputs (`level` = index of the refinement). With
 //!   `[curves]`, a `history.csv` left there by an earlier study is removed before the run.
-//! - `study.csv`: one row per run, rewritten after every run: `variant, level, h, error` (the
-//!   metric; empty for a failed run), `seconds` (wall clock), `newton_its` (total over the steps
+//! - `study.csv`: one row per run, rewritten after every run: `variant, level, h, ranks,
+//!   error` (the metric, or the largest of the metrics; empty for a failed run), `seconds` (wall clock), `newton_its` (total over the steps
 //!   that converged), `converged` (`true`/`false`), `augmentations` (Uzawa, over the steps),
 //!   `peak_memory_mb` (peak resident memory of the run, largest over the ranks: Linux's
 //!   `VmHWM`, reset before each run), `on_front` (see below).
@@ -278,6 +286,18 @@ pub struct VariantSpec {
     /// the speedup: `mpirun -n 2 mortar study` with variants `ranks = 1` and `ranks = 2`.
     /// Default: every rank of the job.
     pub ranks: Option<usize>,
+}
+
+impl VariantSpec {
+    /// The scene's own settings: no edits, no PETSc options, every rank, a choice (not
+    /// `reference_only`). The study's first such variant is its defaults (`default_on_front`).
+    pub fn is_default(&self) -> bool {
+        self.set.is_empty()
+            && self.refinement_set.is_empty()
+            && self.petsc.is_none()
+            && self.ranks.is_none()
+            && !self.reference_only
+    }
 }
 
 /// A validated study.
@@ -562,7 +582,8 @@ impl Study {
                 if scene.petsc_options != study.petsc_options {
                     return Err(err(format!(
                         "variant '{}' at refinement[{j}] changes petsc_options: every run of a \
-                         study shares one PETSc (give options on the command line instead)",
+                         study shares one PETSc (give options on the command line or in the \
+                         variant's petsc key instead)",
                         study.variants[i].name
                     )));
                 }
@@ -626,11 +647,16 @@ impl Study {
             petsc.size(),
             out.display()
         ));
-        if self.curves.is_none() {
+        let first_is_reference = self
+            .curves
+            .as_ref()
+            .is_some_and(|c| c.reference == self.variants[0].name);
+        if !first_is_reference {
             // The first run of a process pays one-time costs (loading the solver libraries,
             // first allocations) that would tilt the comparison of wall times against the
-            // first variant: an untimed run of the first variant's first level comes first.
-            let warm_up = out.join("runs").join("warm_up");
+            // first variant: an untimed run of the first variant's first level comes first
+            // (not when that variant is the curves' reference, which is not on the front).
+            let warm_up = out.join("warm_up");
             if let Some(Err(e)) = self.run_one(petsc, 0, 0, &warm_up)? {
                 if !e.is_collective() {
                     return Err(e);
@@ -652,6 +678,7 @@ impl Study {
                 let ranks = variant.ranks.unwrap_or(job_size);
                 let t0 = Instant::now();
                 let result = self.run_one(petsc, v, level, &run_dir)?;
+                let mut missing_metric = None;
                 let seconds = t0.elapsed().as_secs_f64();
                 // Every rank takes part (-1: not available there).
                 let local = peak_memory_mb().unwrap_or(-1.0);
@@ -681,28 +708,18 @@ impl Study {
                         record.message = s.message.clone();
                     }
                     Some(Ok(s)) => {
-                        let mut error = 0.0f64;
-                        for part in &self.metric_parts {
-                            let Some(&e) = s.metrics.get(part) else {
-                                return Err(Error::Case {
-                                    file: self.file.clone(),
-                                    msg: format!(
-                                        "metric \"{part}\": the runs do not report it (they \
-                                         report: {})",
-                                        s.metrics.keys().cloned().collect::<Vec<_>>().join(", ")
-                                    ),
-                                });
-                            };
-                            error = if self.metric_parts.len() == 1 {
-                                e
-                            } else {
-                                error.max(e.abs())
-                            };
-                        }
-                        record.error = Some(error);
-                        record.converged = true;
                         record.newton_its = s.steps.iter().map(|st| st.newton_its).sum();
                         record.augmentations = s.steps.iter().map(|st| st.augmentations).sum();
+                        match self.error_of(&s) {
+                            Ok(e) if e.is_finite() => {
+                                record.error = Some(e);
+                                record.converged = true;
+                            }
+                            Ok(e) => {
+                                record.message = Some(format!("{} = {e}", self.metric));
+                            }
+                            Err(msg) => missing_metric = Some(msg),
+                        }
                     }
                     // Errors every rank meets alike are this run's failure; any other (an I/O
                     // error on one rank) ends the study, as it ends a run.
@@ -716,7 +733,13 @@ impl Study {
                     }
                     Some(Err(e)) => return Err(e),
                 }
-                share_record(petsc, &mut record);
+                // After the broadcast, so that ranks that waited (`ranks`) stop with the others.
+                if share_record(petsc, &mut record, missing_metric.is_some()) {
+                    return Err(Error::Case {
+                        file: self.file.clone(),
+                        msg: missing_metric.unwrap_or_default(),
+                    });
+                }
                 say(progress_line(&self.metric, &record));
                 runs.push(record);
                 if rank == 0 {
@@ -869,6 +892,26 @@ impl Study {
         pareto_front(&choices, self.error_floor)
     }
 
+    /// A converged run's error: its metric, or the largest absolute value of the metrics (NaN
+    /// if one is not finite); `Err` names a metric the run does not report.
+    fn error_of(&self, run: &Summary) -> std::result::Result<f64, String> {
+        let mut error = 0.0f64;
+        for part in &self.metric_parts {
+            let Some(&e) = run.metrics.get(part) else {
+                return Err(format!(
+                    "metric \"{part}\": the runs do not report it (they report: {})",
+                    run.metrics.keys().cloned().collect::<Vec<_>>().join(", ")
+                ));
+            };
+            error = match self.metric_parts.len() {
+                1 => e,
+                _ if !e.is_finite() || error.is_nan() => f64::NAN,
+                _ => error.max(e.abs()),
+            };
+        }
+        Ok(error)
+    }
+
     /// Runs variant `v` at refinement `level` into `run_dir`, with the variant's PETSc options
     /// and on its ranks: `None` on the ranks that wait while it runs on fewer. The error is the
     /// run's (to record); `Err` only if the variant's options cannot be set.
@@ -880,8 +923,8 @@ impl Study {
         run_dir: &Path,
     ) -> Result<Option<Result<Summary>>> {
         let ranks = self.variants[v].ranks.unwrap_or(petsc.size());
-        let _options = crate::petsc::options::Override::set(&self.variant_options[v])?;
-        Ok(petsc.on_first_ranks(ranks, || {
+        let options = crate::petsc::options::Override::set(&self.variant_options[v])?;
+        let result = petsc.on_first_ranks(ranks, || {
             self.scene(v, level).and_then(|scene| {
                 solver::run(
                     &scene,
@@ -892,7 +935,17 @@ impl Study {
                     },
                 )
             })
-        }))
+        });
+        let unused = options.unused();
+        if petsc.rank() == 0 && !unused.is_empty() {
+            eprintln!(
+                "mortar: warning: variant '{}': PETSc option(s) {} not used (a typo, or an \
+                 option of a solver not in use)",
+                self.variants[v].name,
+                unused.join(", ")
+            );
+        }
+        Ok(result)
     }
 
     /// Checks the `[curves]` columns against the `history.csv` in `run_dir` (rank 0), and
@@ -932,11 +985,11 @@ impl Study {
         }
     }
 
-    /// The Pareto front of error against wall time (the flags are set on `runs`): `pareto.png`
-    /// and `.svg` (every converged run a point, one line per variant, the front ringed),
-    /// `study.csv` rewritten with the flags, the summary's `on_front_<variant>_<level>` and,
-    /// for the default variant (the first without edits: the case file as it is),
-    /// `default_on_front` (the share of its runs on the front). Returns the progress note.
+    /// The Pareto front of error against wall time (the flags are set on `runs`, labelled
+    /// `metric`): `pareto.png` and `.svg` (every converged run a point, one line per variant,
+    /// the front ringed), the summary's `on_front_<variant>_<level>` and, for the default
+    /// variant ([`VariantSpec::is_default`]), `default_on_front` (the share of its runs on the
+    /// front). Returns the progress note.
     fn write_pareto(
         &self,
         runs: &[RunRecord],
@@ -944,7 +997,9 @@ impl Study {
         summary: &mut Summary,
         out: &Path,
     ) -> Result<String> {
-        let point = |r: &RunRecord| r.error.map(|e| (r.seconds, e.abs()));
+        // Errors at or below the floor are plotted at the floor (they count as equal; an exact
+        // 0 would not show on log axes).
+        let point = |r: &RunRecord| r.error.map(|e| (r.seconds, e.abs().max(self.error_floor)));
         let series: Vec<plot::Series> = self
             .variants
             .iter()
@@ -982,12 +1037,7 @@ impl Study {
         }
         let front = runs.iter().filter(|r| r.on_front).count();
         let mut note = format!("Pareto front of {metric} against wall time: {front} run(s)");
-        let default = self.variants.iter().find(|v| {
-            v.set.is_empty()
-                && v.refinement_set.is_empty()
-                && v.petsc.is_none()
-                && v.ranks.is_none()
-        });
+        let default = self.variants.iter().find(|v| v.is_default());
         if let Some(d) = default {
             let mine: Vec<&RunRecord> = runs
                 .iter()
@@ -1298,15 +1348,17 @@ fn curve_scores(
 }
 
 /// Gives every rank rank 0's figures of a run (rank 0 runs every variant; the others may have
-/// waited, and their clocks differ), so that all ranks agree on the study's outcome. The
-/// failure message stays on rank 0, which prints it.
-fn share_record(petsc: &Petsc, r: &mut RunRecord) {
+/// waited, and their clocks differ), so that all ranks agree on the study's outcome, and
+/// returns rank 0's `fatal` (the study must stop). The failure message stays on rank 0, which
+/// prints it.
+fn share_record(petsc: &Petsc, r: &mut RunRecord, fatal: bool) -> bool {
     let mut figures = [
         r.error.unwrap_or(f64::NAN),
         r.seconds,
         r.newton_its as f64,
         r.augmentations as f64,
         f64::from(u8::from(r.converged)),
+        f64::from(u8::from(fatal)),
     ];
     petsc
         .world()
@@ -1317,6 +1369,7 @@ fn share_record(petsc: &Petsc, r: &mut RunRecord) {
     r.newton_its = figures[2] as usize;
     r.augmentations = figures[3] as usize;
     r.converged = figures[4] != 0.0;
+    figures[5] != 0.0
 }
 
 /// `study.csv` of the runs so far.

@@ -26,7 +26,7 @@ use crate::error::{Error, Result};
 /// What a PETSc log says of one run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PetscLog {
-    /// The number of ranks ("with N processors").
+    /// The number of ranks ("with N processors", or "processes" as later PETSc versions say).
     pub ranks: usize,
     /// Wall time of the run (maximum over the ranks), seconds.
     pub seconds: f64,
@@ -61,7 +61,7 @@ pub fn parse(text: &str) -> std::result::Result<PetscLog, String> {
             let n = rest.split_whitespace().next()?.parse::<usize>().ok()?;
             rest.split_whitespace()
                 .nth(1)
-                .filter(|w| w.starts_with("processor"))
+                .filter(|w| w.starts_with("process"))
                 .map(|_| n)
         })
         .ok_or("no line 'with N processors'")?;
