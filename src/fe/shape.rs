@@ -307,75 +307,7 @@ impl ElementType {
     }
 }
 
-/// Calls `f(a, N_a, grad N_a)` for every node `a` of a face of type `ft` at `xi`. On the tensor
-/// faces (Quad4, Quad9) the 1D factors of each axis are evaluated once for the three node
-/// positions `-1, 0, 1` rather than once per node: the same floating-point operations as
-/// [`FaceType::shape_node_at`] for each node.
-#[inline]
-fn for_face_nodes<T: Scalar>(ft: FaceType, xi: [T; 2], mut f: impl FnMut(usize, (T, [T; 2]))) {
-    match ft {
-        FaceType::Quad4 => for_tensor_nodes(ft, xi, linear_1d, f),
-        FaceType::Quad9 => for_tensor_nodes(ft, xi, quadratic_1d, f),
-        _ => {
-            for a in 0..ft.num_nodes() {
-                f(a, ft.shape_node_at(xi, a));
-            }
-        }
-    }
-}
-
-/// [`for_face_nodes`] on a tensor face whose 1D factor is `one_d`.
-#[inline]
-fn for_tensor_nodes<T: Scalar>(
-    ft: FaceType,
-    xi: [T; 2],
-    one_d: impl Fn(f64, T) -> (T, T),
-    mut f: impl FnMut(usize, (T, [T; 2])),
-) {
-    let factors: [[(T, T); 3]; 2] =
-        std::array::from_fn(|i| std::array::from_fn(|k| one_d(k as f64 - 1.0, xi[i])));
-    for (a, s) in QUAD_NODES[..ft.num_nodes()].iter().enumerate() {
-        let fd: [(T, T); 2] = std::array::from_fn(|i| factors[i][(s[i] + 1.0) as usize]);
-        f(a, tensor_product(fd.map(|v| v.0), fd.map(|v| v.1)));
-    }
-}
-
-/// Second derivative of the 1D factor `linear_1d` (zero) or `quadratic_1d` of the node at `s`.
-fn second_derivative_1d(ft: FaceType, s: f64) -> f64 {
-    match ft {
-        FaceType::Quad9 if s == 0.0 => -2.0,
-        FaceType::Quad9 => 1.0,
-        _ => 0.0,
-    }
-}
-
 impl FaceType {
-    /// Values, gradients and second derivatives `[N_,xixi, N_,xieta, N_,etaeta]` of the shape
-    /// functions of a Quad4 or Quad9 face at `xi` (products of the 1D factors, see
-    /// `for_face_nodes`); `false` (nothing written) for the other faces.
-    pub fn tensor_shape_with_hessian(
-        self,
-        xi: [f64; 2],
-        n: &mut [f64],
-        dn: &mut [[f64; 2]],
-        ddn: &mut [[f64; 3]],
-    ) -> bool {
-        if !matches!(self, FaceType::Quad4 | FaceType::Quad9) {
-            return false;
-        }
-        for_face_nodes(self, xi, |a, (v, g)| (n[a], dn[a]) = (v, g));
-        let one_d = |s: f64, t: f64| match self {
-            FaceType::Quad4 => linear_1d(s, t),
-            _ => quadratic_1d(s, t),
-        };
-        for (a, s) in QUAD_NODES[..self.num_nodes()].iter().enumerate() {
-            let [(f0, d0), (f1, d1)] = [one_d(s[0], xi[0]), one_d(s[1], xi[1])];
-            let [h0, h1] = s.map(|si| second_derivative_1d(self, si));
-            ddn[a] = [h0 * f1, d0 * d1, f0 * h1];
-        }
-        true
-    }
-
     /// Value and parametric gradient of shape function `a` at `xi`, for any [`Scalar`].
     #[inline]
     fn shape_node_at<T: Scalar>(self, xi: [T; 2], a: usize) -> (T, [T; 2]) {
@@ -411,7 +343,9 @@ impl FaceType {
     /// If `n.len() != self.num_nodes()`.
     pub fn shape_at<T: Scalar>(self, xi: [T; 2], n: &mut [T]) {
         assert_eq!(n.len(), self.num_nodes(), "shape: wrong buffer length");
-        for_face_nodes(self, xi, |a, (v, _)| n[a] = v);
+        for (a, na) in n.iter_mut().enumerate() {
+            *na = self.shape_node_at(xi, a).0;
+        }
     }
 
     /// Values and gradients at once, for any [`Scalar`] ([`FaceType::shape_at`] and
@@ -422,7 +356,9 @@ impl FaceType {
     pub fn shape_and_grad_at<T: Scalar>(self, xi: [T; 2], n: &mut [T], dn: &mut [[T; 2]]) {
         assert_eq!(n.len(), self.num_nodes(), "shape: wrong buffer length");
         assert_eq!(dn.len(), self.num_nodes(), "shape: wrong buffer length");
-        for_face_nodes(self, xi, |a, (v, g)| (n[a], dn[a]) = (v, g));
+        for (a, (na, ga)) in n.iter_mut().zip(dn.iter_mut()).enumerate() {
+            (*na, *ga) = self.shape_node_at(xi, a);
+        }
     }
 
     /// [`FaceType::shape_grad`] for any [`Scalar`] (with a dual `xi`, the gradients carry the
@@ -436,7 +372,9 @@ impl FaceType {
             self.num_nodes(),
             "shape_grad: wrong buffer length"
         );
-        for_face_nodes(self, xi, |a, (_, g)| dn[a] = g);
+        for (a, ga) in dn.iter_mut().enumerate() {
+            *ga = self.shape_node_at(xi, a).1;
+        }
     }
 }
 
@@ -491,14 +429,8 @@ pub fn face_tangents_at<T: Scalar>(ft: FaceType, x: &[[T; 3]], xi: [T; 2]) -> ([
     );
     let mut dn = [[T::from(0.0); 2]; MAX_FACE_NODES];
     ft.shape_grad_at(xi, &mut dn[..nn]);
-    tangents_from_grad(x, &dn[..nn])
-}
-
-/// The tangent vectors `x_,xi = sum_a N_a,xi x_a`, `x_,eta` from the shape-function gradients
-/// `dn` at a point (what [`face_tangents_at`] computes after evaluating them).
-pub fn tangents_from_grad<T: Scalar>(x: &[[T; 3]], dn: &[[T; 2]]) -> ([T; 3], [T; 3]) {
     let mut t = [[T::from(0.0); 3]; 2];
-    for (xa, ga) in x.iter().zip(dn) {
+    for (xa, ga) in x.iter().zip(&dn[..nn]) {
         for (tk, gk) in t.iter_mut().zip(ga) {
             for d in 0..3 {
                 tk[d] += *gk * xa[d];
@@ -527,11 +459,6 @@ pub fn face_normal(ft: FaceType, x: &[[f64; 3]], xi: [f64; 2]) -> ([f64; 3], f64
 /// If `x.len() != ft.num_nodes()`.
 pub fn face_normal_at<T: Scalar>(ft: FaceType, x: &[[T; 3]], xi: [T; 2]) -> ([T; 3], T) {
     let (t1, t2) = face_tangents_at(ft, x, xi);
-    normal_from_tangents(t1, t2)
-}
-
-/// The unit normal and surface Jacobian of [`face_normal_at`] from the tangent vectors.
-pub fn normal_from_tangents<T: Scalar>(t1: [T; 3], t2: [T; 3]) -> ([T; 3], T) {
     let c = cross_at(t1, t2);
     let jac = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
     if jac.re() > 0.0 {

@@ -33,21 +33,17 @@
 //!      projected first edge, `e2 = n x e1`: the very code of `pair.rs`, generic over the
 //!      scalar) and the projected vertices of `s` and `m`: at most 16 plane coordinates `P`,
 //!      and their Jacobian `dP/dy`.
-//!    - *Level 2* (derivatives with respect to those 16 plane coordinates): the overlap
-//!      vertices from their provenance (a crossing of the lines `a b` and `c d` is
+//!    - *Level 2* (`DualSVec64<16>`, seeded on those plane coordinates): the overlap vertices
+//!      from their provenance (a crossing of the lines `a b` and `c d` is
 //!      `a + t (b - a)`, `t = o_a / (o_a - o_b)`, `o` the orientation about `c d`), the pallet
-//!      centroid, the pallet areas, in `DualSVec64<16>` (once per sub-segment pair or pallet);
-//!      then per quadrature point, with the chain rule written out in plain floats
-//!      (`PlaneValue`, whose docs give the formulas): the point, its local coordinates on both
-//!      projected sub-segments, `det(dP/dlocal)`, the face parent coordinates `xi_s`, `xi_m`
-//!      (the sub-segments' affine maps), and from these `Phi(xi_s)`, `N1(xi_s)`, `N2(xi_m)`
-//!      and the surface Jacobian `J_face(xi_s)`. The values are computed by the same float
-//!      operations as in the dual code of `pair.rs`.
-//!    - The shape functions are evaluated in floats with their `xi`-derivatives (and, for the
-//!      secondary face, their second derivatives, for the `xi`-derivatives of `J_face`:
-//!      [`FaceType::tensor_shape_with_hessian`] on Quad4 and Quad9, the generic kernels of
-//!      [`crate::fe::shape`] in `DualSVec64<2>` on the other faces) and chained to level 2
-//!      through `dxi/dP`, which is exact and much cheaper than evaluating them in 16-slot duals.
+//!      centroid, the pallet areas and quadrature points, the local coordinates of each point on
+//!      both projected sub-segments, `det(dP/dlocal)`, the face parent coordinates `xi_s`,
+//!      `xi_m` (the sub-segments' affine maps), and from these `Phi(xi_s)`, `N1(xi_s)`,
+//!      `N2(xi_m)` and the surface Jacobian `J_face(xi_s)`.
+//!    - The shape functions are evaluated with the generic kernels of [`crate::fe::shape`] at
+//!      `DualSVec64<2>` parent coordinates (values with their `xi`-derivatives; gradients with
+//!      the second derivatives, for the tangents in `J_face`) and chained to level 2 through
+//!      `dxi/dP`, which is exact and much cheaper than evaluating them in 16-slot duals.
 //!    - `J_face = |x_,xi x x_,eta|` also depends on the secondary coordinates directly:
 //!      `dJ = (x_,eta x n) . dx_,xi + (n x x_,xi) . dx_,eta` with `dx_,i = sum_a N_a,i dx_a`.
 //!
@@ -81,15 +77,15 @@
 //! Level 1 uses `DualSVec64<N>` with `N = 24` when `ns + np <= 8` (Tri3 and Quad4 pairs) and
 //! `N = 54` otherwise, but only for a few hundred operations per overlapping sub-segment pair
 //! (nothing in duals is computed for pairs that are rejected: those cost the float work only). The bulk is
-//! per quadrature point and independent of `N`: level 2 (16 slots, plain floats) and the
-//! accumulation. The derivative of `w Phi_k N_b` at a point lies in the span of five directions,
-//! `dw/dP`, `dxi_s/dP` and `dxi_m/dP`, plus `dw/dx_s`; the points of a pallet are tabulated (one
+//! per quadrature point and independent of `N`: level 2 (16 slots) and the accumulation. The
+//! derivative of `w Phi_k N_b` at a point lies in the span of five directions, `dw/dP`,
+//! `dxi_s/dP` and `dxi_m/dP`, plus `dw/dx_s`; the points of a pallet are tabulated (one
 //! coefficient per entry and direction) and added by matrix products (`nalgebra`'s `gemm`, which
-//! uses the vectorized `matrixmultiply` kernels; the `n1` rows without the `dxi_m` directions),
-//! then chained with `dP/dy` once per sub-segment pair. Scheme 3 skips the traction nodes that
-//! are not vertices of the secondary sub-segment. Nothing is allocated per point. Measured
-//! (release, one core, the pairs of `benches/mortar.rs`, scheme 2): Quad4-Quad4 46 us per pair
-//! (7 times `integrate_pair`), Quad9-Quad9 1.2 ms (8 times).
+//! uses the vectorized `matrixmultiply` kernels), then chained with `dP/dy` once per sub-segment
+//! pair. Scheme 3 skips the traction nodes that are not vertices of the secondary sub-segment.
+//! Nothing is allocated per point. Measured (release, one core, the pairs of
+//! `benches/mortar.rs`, scheme 2): Quad4-Quad4 64 us per pair (8 times `integrate_pair`),
+//! Quad9-Quad9 1.8 ms (8 times).
 //!
 //! # Tests
 //!
@@ -101,13 +97,13 @@
 //! exactly on an edge, slivers, NaN coordinates).
 
 use nalgebra::DMatrix;
-use num_dual::DualSVec64;
+use num_dual::{DualNum, DualSVec64};
 
-use super::clip::{area_centroid_at, VertexOrigin};
+use super::clip::{area_centroid_at, Point, VertexOrigin};
 use super::pair::{
     det2, diameter, is_finite_face, overlap_of_sub_pair, primary_subs, solve2, triangle_local,
-    Bilinear, FaceGeom, IntegrationOptions, LocalPoint, Overlap, PairFailure, Plane, Projected,
-    RejectStats, SubPairOutcome,
+    Bilinear, FaceGeom, IntegrationOptions, LocalPoint, Overlap, PairFailure, Plane, RejectStats,
+    SubPairOutcome,
 };
 use super::segments::{
     sub_segments, traction_node_count, traction_shape_on_at, SubSegment, TractionScheme,
@@ -365,8 +361,8 @@ impl<'a> Kernel<'a> {
         overlap: &Overlap,
         tangent: &mut SubPairTangent,
     ) -> Result<(), PairFailure> {
-        let s_map = PlaneMap::new(&overlap.s, 0);
-        let m_map = PlaneMap::new(&overlap.m, PRIMARY_SLOT);
+        let s_map = PlaneMap::new(&overlap.s.vertices, 0);
+        let m_map = PlaneMap::new(&overlap.m.vertices, PRIMARY_SLOT);
         let (polygon, unresolved) = traced_polygon(overlap, &s_map, &m_map);
         tangent.unresolved += unresolved;
         let sec_jacobian = overlap.s.seg.parent_jacobian();
@@ -379,27 +375,21 @@ impl<'a> Kernel<'a> {
             if twice_area.re <= 0.0 {
                 continue;
             }
-            let pallet = Pallet {
-                centroid: centroid.map(|c| PlaneValue::of(&c)),
-                u: u.map(|c| PlaneValue::of(&c)),
-                v: v.map(|c| PlaneValue::of(&c)),
-                twice_area: PlaneValue::of(&twice_area),
-            };
             for (point, (q, w)) in self.rule.points.iter().zip(&self.rule.weights).enumerate() {
-                let p = pallet.point(*q);
+                let p = [
+                    centroid[0] + u[0] * q[0] + v[0] * q[1],
+                    centroid[1] + u[1] * q[0] + v[1] * q[1],
+                ];
                 let p_float = [p[0].re, p[1].re];
                 let on_s = overlap.s.invert(p_float).ok_or(PairFailure::InverseMap)?;
                 let on_m = overlap.m.invert(p_float).ok_or(PairFailure::InverseMap)?;
-                let local_s = s_map.local(&p, &on_s);
-                let local_m = m_map.local(&p, &on_m);
+                let local_s = s_map.local(p, &on_s);
+                let local_m = m_map.local(p, &on_m);
                 let at = PointGeometry {
                     seg: overlap.s.seg,
-                    xi_s: to_parent(overlap.s.seg, &local_s),
-                    xi_m: to_parent(overlap.m.seg, &local_m),
-                    measure: pallet
-                        .twice_area
-                        .scaled(w * sec_jacobian)
-                        .over(&s_map.jacobian(&local_s)),
+                    xi_s: overlap.s.seg.to_parent_at(local_s),
+                    xi_m: overlap.m.seg.to_parent_at(local_m),
+                    measure: twice_area * (w * sec_jacobian) / s_map.jacobian(local_s),
                 };
                 self.add_point(&at, point, tangent)?;
             }
@@ -422,7 +412,7 @@ impl<'a> Kernel<'a> {
     ) -> Result<(), PairFailure> {
         let (mut values, face_jacobian, mut dweight_dx) =
             self.shape_values(at, &mut tangent.phi_scratch);
-        let weight = at.measure.times_lifted(&face_jacobian, &at.xi_s);
+        let weight = at.measure * lift(&face_jacobian, &at.xi_s);
         // dweight/dx_s = weight / J_face dJ_face/dx_s.
         let ratio = if face_jacobian.re > 0.0 {
             weight.re / face_jacobian.re
@@ -445,123 +435,71 @@ impl<'a> Kernel<'a> {
         &self,
         at: &PointGeometry,
         phi_scratch: &mut Vec<ParentDual>,
-    ) -> (PointValues, OfParent, [f64; MAX_SEC_DOFS]) {
+    ) -> (PointValues, ParentDual, [f64; MAX_SEC_DOFS]) {
         let (sec, pri) = (self.sec, self.pri);
-        let ns = sec.x.len();
+        let (ns, np) = (sec.x.len(), pri.x.len());
+        let zero = ParentDual::from_re(0.0);
+        let (mut n, mut dn) = ([zero; MAX_NODES], [[zero; 2]; MAX_NODES]);
         let mut values = PointValues::default();
-        let xi_s = at.xi_s.map(|v| v.re);
-        let (mut n, mut dn, mut ddn) = (
-            [0.0; MAX_NODES],
-            [[0.0; 2]; MAX_NODES],
-            [[0.0; 3]; MAX_NODES],
-        );
-        shape_with_hessian(sec.kind, xi_s, &mut n[..ns], &mut dn[..ns], &mut ddn[..ns]);
+        let s_parent = parent_seed(at.xi_s.map(|v| v.re));
+        sec.kind
+            .shape_and_grad_at(s_parent, &mut n[..ns], &mut dn[..ns]);
         let mut dj_dx = [0.0; MAX_SEC_DOFS];
-        let face_jacobian = face_jacobian(sec.x, &dn[..ns], &ddn[..ns], &mut dj_dx);
-        for ((t, re), d) in values.n1.iter_mut().zip(&n[..ns]).zip(&dn[..ns]) {
-            *t = OfParent { re: *re, d: *d };
+        let face_jacobian = face_jacobian(sec.x, &dn[..ns], &mut dj_dx);
+        OfParent::fill(&mut values.n1, &n[..ns]);
+        if self.scheme == TractionScheme::FaceShape {
+            values.phi = values.n1;
+        } else {
+            traction_shape_on_at(sec.kind, self.scheme, at.seg, s_parent, phi_scratch);
+            OfParent::fill(&mut values.phi, phi_scratch);
         }
-        let s_parent = parent_seed(xi_s);
-        match self.scheme {
-            TractionScheme::FaceShape => values.phi = values.n1,
-            // The corner functions are the linear face's: values and gradients in floats.
-            TractionScheme::Corners => {
-                let linear = if sec.kind.is_quad() {
-                    FaceType::Quad4
-                } else {
-                    FaceType::Tri3
-                };
-                float_shape(linear, at.xi_s.map(|v| v.re), &mut values.phi);
-            }
-            TractionScheme::PiecewiseLinear => {
-                traction_shape_on_at(sec.kind, self.scheme, at.seg, s_parent, phi_scratch);
-                OfParent::fill(&mut values.phi, phi_scratch);
-            }
-        }
-        float_shape(pri.kind, at.xi_m.map(|v| v.re), &mut values.n2);
+        pri.kind
+            .shape_at(parent_seed(at.xi_m.map(|v| v.re)), &mut n[..np]);
+        OfParent::fill(&mut values.n2, &n[..np]);
         (values, face_jacobian, dj_dx)
     }
 }
 
-/// The shape functions of `kind` at `xi` with their `xi`-derivatives, in floats (no second
-/// derivatives needed), into the first `kind.num_nodes()` entries of `to`.
-fn float_shape(kind: FaceType, xi: [f64; 2], to: &mut [OfParent]) {
-    let nn = kind.num_nodes();
-    let (mut n, mut dn) = ([0.0; MAX_NODES], [[0.0; 2]; MAX_NODES]);
-    kind.shape_and_grad_at(xi, &mut n[..nn], &mut dn[..nn]);
-    for ((t, re), d) in to.iter_mut().zip(&n[..nn]).zip(&dn[..nn]) {
-        *t = OfParent { re: *re, d: *d };
-    }
-}
-
-/// The shape functions of the secondary face at `xi`: values, gradients and second derivatives
-/// `[N_,xixi, N_,xieta, N_,etaeta]` (for the `xi`-derivatives of `J_face`), in floats on Quad4
-/// and Quad9, from the generic kernels in `ParentDual` numbers on the other faces.
-fn shape_with_hessian(
-    kind: FaceType,
-    xi: [f64; 2],
-    n: &mut [f64],
-    dn: &mut [[f64; 2]],
-    ddn: &mut [[f64; 3]],
-) {
-    if kind.tensor_shape_with_hessian(xi, n, dn, ddn) {
-        return;
-    }
-    let nn = kind.num_nodes();
-    let zero = ParentDual::from_re(0.0);
-    let (mut nd, mut dnd) = ([zero; MAX_NODES], [[zero; 2]; MAX_NODES]);
-    kind.shape_and_grad_at(parent_seed(xi), &mut nd[..nn], &mut dnd[..nn]);
-    for a in 0..nn {
-        let (g0, g1) = (slots(&dnd[a][0]), slots(&dnd[a][1]));
-        n[a] = nd[a].re;
-        dn[a] = [dnd[a][0].re, dnd[a][1].re];
-        ddn[a] = [g0[0], g0[1], g1[1]];
+/// The chain rule from parent coordinates to plane coordinates: `f(xi(P))` with `f` given with
+/// its `xi`-derivatives and `xi` with its `P`-derivatives.
+fn lift(f: &ParentDual, xi: &[PlaneDual; 2]) -> PlaneDual {
+    match &f.eps.0 {
+        None => PlaneDual::from_re(f.re),
+        Some(g) => PlaneDual::new(f.re, xi[0].eps * g[0] + xi[1].eps * g[1]),
     }
 }
 
 /// The surface Jacobian `J_face = |x_,xi x x_,eta|` of a face with node coordinates `x` from
-/// its shape-function gradients `dn` and second derivatives `ddn` at a point, with its
-/// `xi`-derivatives `dJ/dxi_j = (c / J) . (t_1,j x t_2 + t_1 x t_2,j)` (`c = t_1 x t_2`,
-/// `t_i,j = sum_a N_a,ij x_a`), and `dJ_face/dx_a` (node `a`, axis `d` at `3 a + d`) into
-/// `dj_dx`.
+/// its shape-function gradients `dn` at a point (with their `xi`-derivatives, so `J_face`
+/// carries its own), and `dJ_face/dx_a` (node `a`, axis `d` at `3 a + d`) into `dj_dx`.
 fn face_jacobian(
     x: &[[f64; 3]],
-    dn: &[[f64; 2]],
-    ddn: &[[f64; 3]],
+    dn: &[[ParentDual; 2]],
     dj_dx: &mut [f64; MAX_SEC_DOFS],
-) -> OfParent {
-    // t[i] = x_,i; dt[j][i] = x_,ij.
-    let mut t = [[0.0; 3]; 2];
-    let mut dt = [[[0.0; 3]; 2]; 2];
-    for ((xa, ga), ha) in x.iter().zip(dn).zip(ddn) {
-        let h = [[ha[0], ha[1]], [ha[1], ha[2]]];
-        for d in 0..3 {
-            for i in 0..2 {
-                t[i][d] += ga[i] * xa[d];
-                for j in 0..2 {
-                    dt[j][i][d] += h[i][j] * xa[d];
-                }
+) -> ParentDual {
+    let mut t = [[ParentDual::from_re(0.0); 3]; 2];
+    for (xa, ga) in x.iter().zip(dn) {
+        for (ti, gi) in t.iter_mut().zip(ga) {
+            for d in 0..3 {
+                ti[d] += *gi * xa[d];
             }
         }
     }
     let c = cross_at(t[0], t[1]);
     let jacobian = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
-    let d = dt.map(|dtj| {
-        let dc = [cross_at(dtj[0], t[1]), cross_at(t[0], dtj[1])];
-        (0..3).map(|k| c[k] * (dc[0][k] + dc[1][k])).sum::<f64>() / jacobian
-    });
     dj_dx.fill(0.0);
-    if jacobian > 0.0 {
+    if jacobian.re > 0.0 {
         // dJ = (t2 x n) . dt1 + (n x t1) . dt2, dt_i = sum_a N_a,i dx_a.
-        let n = c.map(|v| v / jacobian);
-        let (h1, h2) = (cross_at(t[1], n), cross_at(n, t[0]));
+        let n = c.map(|v| v.re / jacobian.re);
+        let [t1, t2] = t.map(|ti| ti.map(|v| v.re));
+        let (h1, h2) = (cross_at(t2, n), cross_at(n, t1));
         for (a, g) in dn.iter().enumerate() {
             for d in 0..3 {
-                dj_dx[3 * a + d] = h1[d] * g[0] + h2[d] * g[1];
+                dj_dx[3 * a + d] = h1[d] * g[0].re + h2[d] * g[1].re;
             }
         }
     }
-    OfParent { re: jacobian, d }
+    jacobian
 }
 
 /// The projected vertices of a sub-segment of a face with dual coordinates `x`.
@@ -597,142 +535,16 @@ fn plane_chain<const N: usize>(
     chain
 }
 
-/// A function of the plane coordinates at one quadrature point: its value and its derivatives
-/// along the level-2 slots, as plain floats.
-///
-/// The level-2 work per quadrature point is done on these, with the derivatives written out
-/// (the chain rule by hand), rather than in `PlaneDual`: the value of every quantity is computed
-/// by the very float operations of the dual code (so of `integrate_pair`), and the derivatives
-/// are those of the module docs:
-///
-/// - the point `P = c + q_0 u + q_1 v` of a pallet (centroid `c`, edges `u`, `v` from it):
-///   `dP = dc + q_0 du + q_1 dv`;
-/// - its local coordinates on a projected sub-segment with vertices `Q_i` (triangle or bilinear
-///   quadrilateral, `P(local) = sum_i N_i(local) Q_i`), from `P(local) = P`:
-///   `dlocal = J^-1 (dP - sum_i N_i dQ_i)` with `J = dP/dlocal` at the float solution (for the
-///   quadrilateral this is the derivative of the one dual Newton step of the module docs);
-/// - `xi = xi_0 + A local` (the sub-segment's affine map): `dxi = A dlocal`;
-/// - `det(dP/dlocal)`: constant on a triangle (a dual of the vertices), on a quadrilateral
-///   `(a_0 + c_0 t)(b_1 + c_1 s) - (b_0 + c_0 s)(a_1 + c_1 t)`, differentiated through the
-///   monomial coefficients (duals of the vertices) and `(s, t)`.
-#[derive(Clone, Copy)]
-struct PlaneValue {
-    re: f64,
-    d: [f64; PLANE_SLOTS],
-}
-
-impl PlaneValue {
-    const ZERO: PlaneValue = PlaneValue {
-        re: 0.0,
-        d: [0.0; PLANE_SLOTS],
-    };
-
-    fn of(x: &PlaneDual) -> Self {
-        PlaneValue {
-            re: x.re,
-            d: slots(x),
-        }
-    }
-
-    /// `self * f` for a float `f`.
-    fn scaled(&self, f: f64) -> Self {
-        PlaneValue {
-            re: self.re * f,
-            d: self.d.map(|v| v * f),
-        }
-    }
-
-    /// `self / den`.
-    fn over(&self, den: &PlaneValue) -> Self {
-        let inverse = 1.0 / den.re;
-        let ratio = self.re * inverse;
-        PlaneValue {
-            re: self.re / den.re,
-            d: std::array::from_fn(|k| (self.d[k] - ratio * den.d[k]) * inverse),
-        }
-    }
-
-    /// `self * f(xi(P))` for a function `f` of the parent coordinates given with its
-    /// `xi`-derivatives and `xi` with its `P`-derivatives (the chain rule to plane coordinates).
-    fn times_lifted(&self, f: &OfParent, xi: &[PlaneValue; 2]) -> Self {
-        let g = f.d;
-        PlaneValue {
-            re: self.re * f.re,
-            d: std::array::from_fn(|k| {
-                self.d[k] * f.re + self.re * (xi[0].d[k] * g[0] + xi[1].d[k] * g[1])
-            }),
-        }
-    }
-}
-
-/// The level-2 pallet: its centroid, the edges `u`, `v` from the centroid and `det [u v]`.
-struct Pallet {
-    centroid: [PlaneValue; 2],
-    u: [PlaneValue; 2],
-    v: [PlaneValue; 2],
-    twice_area: PlaneValue,
-}
-
-impl Pallet {
-    /// The point `c + q_0 u + q_1 v` of the pallet.
-    fn point(&self, q: [f64; 2]) -> [PlaneValue; 2] {
-        let mut p = [PlaneValue::ZERO; 2];
-        for (i, pi) in p.iter_mut().enumerate() {
-            let (c, u, v) = (&self.centroid[i], &self.u[i], &self.v[i]);
-            pi.re = c.re + u.re * q[0] + v.re * q[1];
-            for k in 0..PLANE_SLOTS {
-                pi.d[k] = c.d[k] + u.d[k] * q[0] + v.d[k] * q[1];
-            }
-        }
-        p
-    }
-}
-
-/// The parent coordinates `xi = xi_0 + A local` of a point with local coordinates `local` on
-/// `seg`.
-fn to_parent(seg: &SubSegment, local: &[PlaneValue; 2]) -> [PlaneValue; 2] {
-    let xi = seg.to_parent([local[0].re, local[1].re]);
-    let (_, a) = seg.affine_map();
-    let mut out = [PlaneValue::ZERO; 2];
-    for (i, o) in out.iter_mut().enumerate() {
-        o.re = xi[i];
-        for k in 0..PLANE_SLOTS {
-            o.d[k] = a[i][0] * local[0].d[k] + a[i][1] * local[1].d[k];
-        }
-    }
-    out
-}
-
 /// A projected sub-segment in level-2 duals: its vertices seeded on their slots (the first
-/// three of a triangle), for the provenance of the overlap vertices, and the float data of the
-/// per-point maps (see [`PlaneValue`]).
-struct PlaneMap<'o> {
+/// three of a triangle), and for a quadrilateral its bilinear map.
+struct PlaneMap {
     vertices: [[PlaneDual; 2]; 4],
-    /// The float sub-segment (its vertices and, for a quadrilateral, its bilinear map).
-    projected: &'o Projected<'o>,
-    /// The slot of the first vertex.
-    first: usize,
-    /// A quadrilateral: the derivatives of the monomial coefficients `a`, `b`, `c` of its bilinear
-    /// map (constant); a triangle: `det(dP/dlocal)` (constant).
-    shape: MapShape,
+    bilinear: Option<Bilinear<PlaneDual>>,
 }
 
-/// The constant level-2 data of a projected sub-segment (see [`PlaneMap`]); one per projected
-/// sub-segment of an overlapping pair, on the stack, so the size of `Quad` does not matter.
-#[allow(clippy::large_enum_variant)]
-enum MapShape {
-    Triangle(PlaneValue),
-    Quad {
-        a: [[f64; PLANE_SLOTS]; 2],
-        b: [[f64; PLANE_SLOTS]; 2],
-        c: [[f64; PLANE_SLOTS]; 2],
-    },
-}
-
-impl<'o> PlaneMap<'o> {
-    /// The projected sub-segment `projected`, seeded on the slots from `first`.
-    fn new(projected: &'o Projected<'o>, first: usize) -> Self {
-        let v = &projected.vertices;
+impl PlaneMap {
+    /// The sub-segment with float vertices `v`, seeded on the slots from `first`.
+    fn new(v: &[Point], first: usize) -> Self {
         let mut vertices = [[PlaneDual::from_re(0.0); 2]; 4];
         for (i, (to, from)) in vertices.iter_mut().zip(v).enumerate() {
             *to = [
@@ -740,26 +552,8 @@ impl<'o> PlaneMap<'o> {
                 PlaneDual::from_re(from[1]).derivative(first + 2 * i + 1),
             ];
         }
-        let shape = if v.len() == 4 {
-            let map = Bilinear::new(&vertices);
-            MapShape::Quad {
-                a: map.a.map(|x| slots(&x)),
-                b: map.b.map(|x| slots(&x)),
-                c: map.c.map(|x| slots(&x)),
-            }
-        } else {
-            let q = &vertices;
-            MapShape::Triangle(PlaneValue::of(&det2(
-                [q[1][0] - q[0][0], q[1][1] - q[0][1]],
-                [q[2][0] - q[0][0], q[2][1] - q[0][1]],
-            )))
-        };
-        PlaneMap {
-            vertices,
-            projected,
-            first,
-            shape,
-        }
+        let bilinear = (v.len() == 4).then(|| Bilinear::new(&vertices));
+        PlaneMap { vertices, bilinear }
     }
 
     fn vertex(&self, i: usize) -> [PlaneDual; 2] {
@@ -767,81 +561,31 @@ impl<'o> PlaneMap<'o> {
     }
 
     /// Local coordinates of `p` given the float solution `found`: closed form on a triangle,
-    /// one Newton step from `found` on a quadrilateral (see the module docs), with their
-    /// derivatives `J^-1 (dP - sum_i N_i dQ_i)`.
-    fn local(&self, p: &[PlaneValue; 2], found: &LocalPoint) -> [PlaneValue; 2] {
-        let q = &self.projected.vertices;
-        let p_float = [p[0].re, p[1].re];
-        let (local, j, n) = match self.projected.bilinear() {
-            None => {
-                let (local, _) = triangle_local(q, p_float);
-                let j = [
-                    [q[1][0] - q[0][0], q[2][0] - q[0][0]],
-                    [q[1][1] - q[0][1], q[2][1] - q[0][1]],
-                ];
-                let n = [1.0 - local[0] - local[1], local[0], local[1], 0.0];
-                (local, j, n)
-            }
+    /// one Newton step from `found` on a quadrilateral (see the module docs).
+    fn local(&self, p: [PlaneDual; 2], found: &LocalPoint) -> [PlaneDual; 2] {
+        match &self.bilinear {
+            None => triangle_local(&self.vertices[..3], p).0,
             Some(map) => {
                 let x = map.point(found.local);
                 let j = map.jacobian_re(found.local);
                 let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
-                let [d0, d1] = solve2(j, det, [x[0] - p_float[0], x[1] - p_float[1]]);
-                let local = [found.local[0] - d0, found.local[1] - d1];
-                let [s, t] = found.local;
-                let n = [
-                    0.25 * (1.0 - s) * (1.0 - t),
-                    0.25 * (1.0 + s) * (1.0 - t),
-                    0.25 * (1.0 + s) * (1.0 + t),
-                    0.25 * (1.0 - s) * (1.0 + t),
-                ];
-                (local, j, n)
-            }
-        };
-        // g = dP - sum_i N_i dQ_i, then J^-1 g.
-        let mut g = [p[0].d, p[1].d];
-        for (i, ni) in n[..q.len()].iter().enumerate() {
-            for (axis, ga) in g.iter_mut().enumerate() {
-                ga[self.first + 2 * i + axis] -= ni;
+                let [d0, d1] = solve2(j, det, [x[0] - p[0], x[1] - p[1]]);
+                [-d0 + found.local[0], -d1 + found.local[1]]
             }
         }
-        let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
-        [
-            PlaneValue {
-                re: local[0],
-                d: std::array::from_fn(|k| (g[0][k] * j[1][1] - g[1][k] * j[0][1]) / det),
-            },
-            PlaneValue {
-                re: local[1],
-                d: std::array::from_fn(|k| (g[1][k] * j[0][0] - g[0][k] * j[1][0]) / det),
-            },
-        ]
     }
 
     /// `det(dP/dlocal)` at `local`.
-    fn jacobian(&self, local: &[PlaneValue; 2]) -> PlaneValue {
-        match (&self.shape, self.projected.bilinear()) {
-            (MapShape::Quad { a, b, c }, Some(map)) => {
-                let [s, t] = local;
-                let (ma, mb, mc) = (map.a, map.b, map.c);
-                // d J_ij through the coefficients (constant slots) and through (s, t).
-                let j00 = ma[0] + mc[0] * t.re;
-                let j11 = mb[1] + mc[1] * s.re;
-                let j01 = mb[0] + mc[0] * s.re;
-                let j10 = ma[1] + mc[1] * t.re;
-                PlaneValue {
-                    re: map.jacobian([s.re, t.re]),
-                    d: std::array::from_fn(|k| {
-                        let dj00 = a[0][k] + c[0][k] * t.re + mc[0] * t.d[k];
-                        let dj11 = b[1][k] + c[1][k] * s.re + mc[1] * s.d[k];
-                        let dj01 = b[0][k] + c[0][k] * s.re + mc[0] * s.d[k];
-                        let dj10 = a[1][k] + c[1][k] * t.re + mc[1] * t.d[k];
-                        dj00 * j11 + j00 * dj11 - dj01 * j10 - j01 * dj10
-                    }),
-                }
+    fn jacobian(&self, local: [PlaneDual; 2]) -> PlaneDual {
+        match &self.bilinear {
+            None => {
+                let q = &self.vertices;
+                det2(
+                    [q[1][0] - q[0][0], q[1][1] - q[0][1]],
+                    [q[2][0] - q[0][0], q[2][1] - q[0][1]],
+                )
             }
-            (&MapShape::Triangle(det), _) => det,
-            (MapShape::Quad { .. }, None) => unreachable!("a quadrilateral has its bilinear map"),
+            Some(map) => map.jacobian(local),
         }
     }
 }
@@ -910,11 +654,11 @@ fn traced_polygon(
 struct PointGeometry<'s> {
     /// The secondary sub-segment (for scheme 3).
     seg: &'s SubSegment,
-    xi_s: [PlaneValue; 2],
-    xi_m: [PlaneValue; 2],
+    xi_s: [PlaneDual; 2],
+    xi_m: [PlaneDual; 2],
     /// `w_P det(dP/dlocal_pallet) det(dxi/dlocal) / det(dP/dlocal_s)`: the weight without
     /// `J_face`.
-    measure: PlaneValue,
+    measure: PlaneDual,
 }
 
 /// `Phi_k(xi_s)`, `N1_b(xi_s)`, `N2_c(xi_m)` with their `xi`-derivatives, and the weight, at
@@ -945,8 +689,7 @@ impl PointValues {
 /// - `d(w Phi_k N_b)/dP = Phi_k N_b dw/dP + w (N_b dPhi_k/dxi + Phi_k dN_b/dxi) dxi_s/dP` for
 ///   `n1`, and for `n2` with `w Phi_k dN_c/dxi dxi_m/dP` in the last term: `coefficients`
 ///   (`rows x 5 points`: blocks `dw`, `dxi_s0`, `dxi_s1`, `dxi_m0`, `dxi_m1`) times
-///   `directions` (`5 points x 16`: these derivatives of each point); the `dxi_m` blocks of
-///   the `n1` rows are zero and left out of their product;
+///   `directions` (`5 points x 16`: these derivatives of each point);
 /// - `d(w Phi_k N_b)/dx_s = Phi_k N_b dw/dx_s`: the first block of the coefficients times
 ///   `dweight_dx` (`points x 3 ns`).
 struct SubPairTangent {
@@ -1015,18 +758,18 @@ impl SubPairTangent {
         point: usize,
         values: &PointValues,
         at: &PointGeometry,
-        weight: &PlaneValue,
+        weight: &PlaneDual,
         dweight_dx: &[f64],
     ) {
         let q = self.points;
         let w = values.weight;
         self.area += w;
         let directions = [
-            &weight.d,
-            &at.xi_s[0].d,
-            &at.xi_s[1].d,
-            &at.xi_m[0].d,
-            &at.xi_m[1].d,
+            slots(weight),
+            slots(&at.xi_s[0]),
+            slots(&at.xi_s[1]),
+            slots(&at.xi_m[0]),
+            slots(&at.xi_m[1]),
         ];
         for (block, direction) in directions.iter().enumerate() {
             for (i, v) in direction.iter().enumerate() {
@@ -1047,6 +790,8 @@ impl SubPairTangent {
                 c[(r, point)] = phi.re * n.re;
                 c[(r, q + point)] = w * (n.re * phi.d[0] + phi.re * n.d[0]);
                 c[(r, 2 * q + point)] = w * (n.re * phi.d[1] + phi.re * n.d[1]);
+                c[(r, 3 * q + point)] = 0.0;
+                c[(r, 4 * q + point)] = 0.0;
                 self.values[r] += wp * n.re;
             }
             for (c_node, n) in values.n2[..np].iter().enumerate() {
@@ -1061,24 +806,13 @@ impl SubPairTangent {
         }
     }
 
-    /// Adds the tabulated derivatives of a complete pallet (the rows of `n1` without the
-    /// `dxi_m` blocks, whose coefficients are zero).
+    /// Adds the tabulated derivatives of a complete pallet.
     fn add_pallet(&mut self) {
-        let (rows1, rows) = self.rows();
-        let q = self.points;
-        self.plane.rows_mut(0, rows1).gemm(
-            1.0,
-            &self.coefficients.view((0, 0), (rows1, 3 * q)),
-            &self.directions.rows(0, 3 * q),
-            1.0,
-        );
-        self.plane.rows_mut(rows1, rows - rows1).gemm(
-            1.0,
-            &self.coefficients.rows(rows1, rows - rows1),
-            &self.directions,
-            1.0,
-        );
+        let (_, rows) = self.rows();
         let c = self.coefficients.rows(0, rows);
+        self.plane
+            .rows_mut(0, rows)
+            .gemm(1.0, &c, &self.directions, 1.0);
         self.face
             .rows_mut(0, rows)
             .gemm(1.0, &c.columns(0, self.points), &self.dweight_dx, 1.0);

@@ -93,9 +93,7 @@ use super::clip::{clip_convex_traced, is_convex_ccw, pallets, Clipped, Point, Ve
 use super::segments::{
     sub_segments, traction_node_count, traction_shape_on, SubSegment, TractionScheme,
 };
-use crate::fe::shape::{
-    cross_at, face_normal_at, face_point_at, normal_from_tangents, tangents_from_grad, Scalar,
-};
+use crate::fe::shape::{cross_at, face_normal_at, face_point_at, Scalar};
 use crate::fe::{face_normal, FaceType};
 
 /// A primary sub-segment is integrated only if its normal `n_m` satisfies
@@ -353,9 +351,9 @@ pub(super) fn triangle_local<T: Scalar>(q: &[[T; 2]], p: [T; 2]) -> ([T; 2], T) 
 /// coordinates) in the monomial form `P = p0 + a s + b t + c s t`, for any [`Scalar`].
 pub(super) struct Bilinear<T = f64> {
     p0: [T; 2],
-    pub(super) a: [T; 2],
-    pub(super) b: [T; 2],
-    pub(super) c: [T; 2],
+    a: [T; 2],
+    b: [T; 2],
+    c: [T; 2],
 }
 
 impl<T: Scalar> Bilinear<T> {
@@ -455,11 +453,6 @@ impl<'s> Projected<'s> {
             orientation,
             bilinear,
         }
-    }
-
-    /// The bilinear map of a quadrilateral (`None` for a triangle).
-    pub(super) fn bilinear(&self) -> Option<&Bilinear> {
-        self.bilinear.as_ref()
     }
 
     /// Local coordinates of `p` (barycentric on a triangle, bilinear inverse on a quad).
@@ -601,7 +594,6 @@ struct PairContext<'a> {
 struct Scratch {
     phi: Vec<f64>,
     n1: Vec<f64>,
-    dn1: Vec<[f64; 2]>,
     n2: Vec<f64>,
 }
 
@@ -632,8 +624,9 @@ impl PairContext<'_> {
                 let on_m = m.invert(p).ok_or(PairFailure::InverseMap)?;
                 let xi_s = s.seg.to_parent(on_s.local);
                 let xi_m = m.seg.to_parent(on_m.local);
-                let face_jacobian = self.evaluate(s.seg, xi_s, xi_m, scratch);
+                let (_, face_jacobian) = face_normal(self.sec.kind, self.sec.x, xi_s);
                 let weight = w * twice_area * face_jacobian * sec_jacobian / on_s.jacobian;
+                self.evaluate(s.seg, xi_s, xi_m, scratch);
                 let values = scratch.phi.iter().chain(&scratch.n1).chain(&scratch.n2);
                 if !weight.is_finite() || !values.into_iter().all(|v| v.is_finite()) {
                     return Err(PairFailure::NonFinite);
@@ -644,26 +637,13 @@ impl PairContext<'_> {
         Ok(())
     }
 
-    /// Phi and N1 at `xi_s` on the secondary face, N2 at `xi_m` on the primary face; returns
-    /// the surface Jacobian `J_face(xi_s)` (from the gradients of N1, as [`face_normal`]).
-    fn evaluate(
-        &self,
-        seg: &SubSegment,
-        xi_s: [f64; 2],
-        xi_m: [f64; 2],
-        scratch: &mut Scratch,
-    ) -> f64 {
-        let ns = self.sec.kind.num_nodes();
+    /// Phi and N1 at `xi_s` on the secondary face, N2 at `xi_m` on the primary face.
+    fn evaluate(&self, seg: &SubSegment, xi_s: [f64; 2], xi_m: [f64; 2], scratch: &mut Scratch) {
         traction_shape_on(self.sec.kind, self.scheme, seg, xi_s, &mut scratch.phi);
-        scratch.n1.resize(ns, 0.0);
-        scratch.dn1.resize(ns, [0.0; 2]);
+        scratch.n1.resize(self.sec.kind.num_nodes(), 0.0);
         scratch.n2.resize(self.pri.kind.num_nodes(), 0.0);
-        self.sec
-            .kind
-            .shape_and_grad_at(xi_s, &mut scratch.n1, &mut scratch.dn1);
+        self.sec.kind.shape(xi_s, &mut scratch.n1);
         self.pri.kind.shape(xi_m, &mut scratch.n2);
-        let (t1, t2) = tangents_from_grad(self.sec.x, &scratch.dn1);
-        normal_from_tangents(t1, t2).1
     }
 }
 

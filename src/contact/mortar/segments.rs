@@ -144,7 +144,7 @@ impl SubSegment {
     /// The affine map `xi = origin + J local` of the sub-segment into the parent domain (exact:
     /// triangles, and quadrilaterals that are parallelograms in the parent domain, which all
     /// sub-segments of [`sub_segments`] are). Returns `(origin, J)` with `J[i][j] = dxi_i/dlocal_j`.
-    pub fn affine_map(&self) -> ([f64; 2], [[f64; 2]; 2]) {
+    fn affine_map(&self) -> ([f64; 2], [[f64; 2]; 2]) {
         let v = &self.vertices;
         if v.len() == 3 {
             let j = [
