@@ -43,10 +43,13 @@
 //!
 //! # Graded boxes
 //!
-//! [`graded_box_mesh`] maps each axis by `x = lo + (hi - lo) expm1(beta u) / expm1(beta)`
-//! ([`exp_grading`]), so the cells grow in a constant ratio from `lo` to `hi` and the last is
-//! `grading` times the first (`beta = ln(grading) n / (n - 1)` for `n` cells; OpenFOAM's
-//! expansion ratio).
+//! [`graded_box_mesh`] puts the cell corners along each axis at
+//! `x = lo + (hi - lo) expm1(beta u) / expm1(beta)` ([`exp_grading`]), so the cells grow in a
+//! constant ratio from `lo` to `hi` and the last is `grading` times the first
+//! (`beta = ln(grading) n / (n - 1)` for `n` cells; OpenFOAM's expansion ratio);
+//! [`zoned_box_mesh`] keeps the cells uniform over a zone at the fine end first
+//! ([`ZoneGrading`]). Inside a cell the map is linear: the elements are straight-sided boxes,
+//! with the mid-nodes of quadratic elements halfway along their edges.
 //!
 //! # Hemisphere
 //!
@@ -61,18 +64,23 @@
 //!   direction `d = (1, tan(pi s / 4), tan(pi t / 4))` (cyclic permutations for the other two),
 //!   and the point at depth parameter `w` is `c d + omega(w) (R d / |d| - c d)`, from the cube
 //!   face (where the core's lattice is, node for node) along the ray to the sphere. The layers
-//!   are graded toward the sphere, `omega(w) = 1 - exp_grading(1 - w, beta)` with the innermost
-//!   layer `radial_grading` times as thick as the outermost.
+//!   are graded toward the sphere: the layer boundaries are at
+//!   `omega(k / n_rad) = 1 - exp_grading(1 - k / n_rad, beta)` with the innermost layer
+//!   `radial_grading` times as thick as the outermost, and `omega` is linear within a layer.
 //!
 //! The blocks meet node for node (the core's faces are the patches' inner faces, and
 //! neighbouring patches share the rays of their common edge), and coincident nodes are merged.
 //! Then every point goes through one **polar grading** map toward the pole, in spherical
 //! coordinates about the centre (`theta` from the pole):
-//! `theta -> theta + w(r) (G(theta) - theta)`, `r` and the azimuth kept, with
-//! `G(theta) = pi/2 exp_grading(2 theta / pi, ln pole_grading)` (the polar spacing at the
-//! equator `pole_grading` times that at the pole) and the weight `w(r) = (r / R)^2` (full at
-//! the surface, none at the centre). In the `(r, theta)` plane its Jacobian determinant is
-//! `1 - w + w G'(theta) > 0`, so it is orientation preserving; it keeps the sphere, the flat
+//! `theta -> theta + w(r) (G(theta) - theta)`, `r` and the azimuth kept, with the weight
+//! `w(r) = (r / R)^2` (full at the surface, none at the centre) and `G` the [`ZoneGrading`] of
+//! `[0, pi/2]` (uniform spacing over the arc `pole_zone` from the pole, then growing to
+//! `pole_grading` times that at the equator) sampled at the `2 n_circ + 1` equal-angle polar
+//! angles of the cell corners along a meridian and linear in between, so that within a cell
+//! the map is a rotation by a linear function of the angle and the mid-nodes of quadratic
+//! elements stay halfway (in angle) between their corners even where the cells grow fast. In
+//! the `(r, theta)` plane its Jacobian determinant is `1 - w + w G'(theta) > 0`, so it is
+//! orientation preserving; it keeps the sphere, the flat
 //! face `theta = pi/2`, the symmetry planes (azimuth 0 and pi/2) and the axis, so sets and the
 //! conformity of the blocks survive it. Grading the cube-sphere's surface parameters instead
 //! (one monotone map on every parameter, which also keeps the patches conforming) would refine
@@ -412,7 +420,8 @@ pub fn graded_box_mesh(
 /// grading above 1, `hi` below 1): along axis `d` the first `zone[d]` of the length (measured
 /// from the fine end) has uniform cells, then the cells grow ([`ZoneGrading`]); the grading is
 /// then the spacing at the coarse end over the zone's (the ratio of the continuous profile,
-/// near that of the end cells). A zero zone is [`graded_box_mesh`]'s exact cell ratio.
+/// near that of the end cells). A zero zone is [`graded_box_mesh`]'s exact cell ratio. The cell
+/// corners follow the map and every cell is straight (mid-nodes halfway along the edges).
 ///
 /// # Panics
 /// If a division is zero, a grading is not finite and positive, or a zone is not in
@@ -449,20 +458,39 @@ pub fn zoned_box_mesh(
             ZoneGrading {
                 u_zone: 0.0,
                 beta,
-                total: if beta == 0.0 { 1.0 } else { beta.exp_m1() / beta },
+                total: if beta == 0.0 {
+                    1.0
+                } else {
+                    beta.exp_m1() / beta
+                },
             }
         } else {
             ZoneGrading::new(ratio, share)
         };
         (g, flip)
     });
-    let along = |d: usize, u: f64| -> f64 {
+    // The cell corners along each axis; inside a cell the map is linear, so the elements are
+    // straight-sided and the mid-nodes of quadratic elements sit at the middle of their edges
+    // (the smooth map would push them toward the coarse end, by a lot in a steeply growing
+    // cell).
+    let corners: [Vec<f64>; 3] = std::array::from_fn(|d| {
         let (g, flip) = axes[d];
-        if flip {
-            1.0 - g.map(1.0 - u)
-        } else {
-            g.map(u)
-        }
+        (0..=div[d])
+            .map(|i| {
+                let u = i as f64 / div[d] as f64;
+                if flip {
+                    1.0 - g.map(1.0 - u)
+                } else {
+                    g.map(u)
+                }
+            })
+            .collect()
+    });
+    let along = |d: usize, u: f64| -> f64 {
+        let c = &corners[d];
+        let t = u * div[d] as f64;
+        let i = (t.floor() as usize).min(div[d] - 1);
+        c[i] + (t - i as f64) * (c[i + 1] - c[i])
     };
     mapped_block(
         kind,
@@ -590,6 +618,7 @@ pub const HEMISPHERE_CORE: f64 = 0.5;
 ///
 /// # Panics
 /// If `n_circ` or `n_rad` is zero, or a grading is not finite and positive.
+#[allow(clippy::too_many_arguments)]
 pub fn hemisphere_quarter(
     kind: ElementType,
     n_circ: usize,
@@ -612,7 +641,16 @@ pub fn hemisphere_quarter(
     // Layers: the outermost is 1 / radial_grading of the innermost.
     let beta_rad = cell_ratio_exponent(radial_grading, n_rad);
     let half_pi = std::f64::consts::FRAC_PI_2;
-    let polar = ZoneGrading::new(pole_grading, pole_zone / (half_pi * r_big));
+    let smooth = ZoneGrading::new(pole_grading, pole_zone / (half_pi * r_big));
+    // G at the polar angles of the cells' corners along a meridian (2 n_circ equal-angle cells
+    // before grading), linear in between.
+    let cells = 2 * n_circ;
+    let polar = PolarGrading {
+        identity: smooth.beta == 0.0,
+        knots: (0..=cells)
+            .map(|k| half_pi * smooth.map(k as f64 / cells as f64))
+            .collect(),
+    };
     // Everything is built in the frame (x', y', z') with the pole along +z' from the centre at
     // the origin, then turned by (x', y', z') -> (y', x', R - z') (two reflections: a proper
     // rotation plus a shift).
@@ -620,12 +658,19 @@ pub fn hemisphere_quarter(
         let q = polar_grading(p, r_big, &polar);
         [q[1], q[0], r_big - q[2]]
     };
+    let place_core = place.clone();
+    let layers: Vec<f64> = (0..=n_rad)
+        .map(|k| 1.0 - exp_grading(1.0 - k as f64 / n_rad as f64, beta_rad))
+        .collect();
     let shell = move |w: f64, d: [f64; 3]| -> [f64; 3] {
         // d has its largest component 1: core * d is on a face of the core cube, and the sphere
         // point on the same ray is R d / |d|.
         let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-        // Thin layers at the surface: w -> 1 - grading(1 - w).
-        let s = 1.0 - exp_grading(1.0 - w, beta_rad);
+        // Thin layers at the surface: the layers' boundaries at 1 - grading(1 - k / n_rad),
+        // linear within a layer (mid-nodes halfway through their layer).
+        let t = (w * n_rad as f64).clamp(0.0, n_rad as f64);
+        let k = (t.floor() as usize).min(n_rad - 1);
+        let s = layers[k] + (t - k as f64) * (layers[k + 1] - layers[k]);
         let p: [f64; 3] = std::array::from_fn(|i| {
             let inner = core * d[i];
             let outer = r_big * d[i] / n;
@@ -639,7 +684,7 @@ pub fn hemisphere_quarter(
     let blocks: [(PatchMap, [&str; 4], [usize; 3]); 4] = [
         (
             Box::new(move |u: [f64; 3]| {
-                place([
+                place_core([
                     core * tan_quarter(u[0]),
                     core * tan_quarter(u[1]),
                     core * tan_quarter(u[2]),
@@ -649,12 +694,18 @@ pub fn hemisphere_quarter(
             [n_circ, n_circ, n_circ],
         ),
         (
-            Box::new(move |u: [f64; 3]| shell(u[2], [1.0, tan_quarter(u[0]), tan_quarter(u[1])])),
+            Box::new({
+                let shell = shell.clone();
+                move |u: [f64; 3]| shell(u[2], [1.0, tan_quarter(u[0]), tan_quarter(u[1])])
+            }),
             ["symx", "flat", "", "sphere"],
             [n_circ, n_circ, n_rad],
         ),
         (
-            Box::new(move |u: [f64; 3]| shell(u[2], [tan_quarter(u[1]), 1.0, tan_quarter(u[0])])),
+            Box::new({
+                let shell = shell.clone();
+                move |u: [f64; 3]| shell(u[2], [tan_quarter(u[1]), 1.0, tan_quarter(u[0])])
+            }),
             ["flat", "symy", "", "sphere"],
             [n_circ, n_circ, n_rad],
         ),
@@ -686,20 +737,37 @@ pub fn hemisphere_quarter(
     out
 }
 
+/// The polar grading of [`hemisphere_quarter`]: `G` at the equal-angle knots
+/// `theta_k = k pi / (2 cells)`, `k = 0..=cells`.
+#[derive(Clone)]
+struct PolarGrading {
+    identity: bool,
+    knots: Vec<f64>,
+}
+
+impl PolarGrading {
+    /// `G(theta)`, linear between the knots.
+    fn at(&self, theta: f64) -> f64 {
+        let cells = self.knots.len() - 1;
+        let t = (theta / std::f64::consts::FRAC_PI_2 * cells as f64).clamp(0.0, cells as f64);
+        let k = (t.floor() as usize).min(cells - 1);
+        self.knots[k] + (t - k as f64) * (self.knots[k + 1] - self.knots[k])
+    }
+}
+
 /// The grading of [`hemisphere_quarter`] toward its pole, in the frame with the pole along
 /// `+z` from the centre at the origin: in spherical coordinates `(r, theta, phi)` about the
-/// centre (`theta` from the pole), `theta -> theta + w (G(theta) - theta)` with `w = (r / R)^2`
-/// and `G(theta) = pi/2 polar(2 theta / pi)`; `r` and `phi` are kept. Points on the axis, on
-/// the plane `z = 0` or at the centre do not move.
-fn polar_grading(p: [f64; 3], radius: f64, polar: &ZoneGrading) -> [f64; 3] {
+/// centre (`theta` from the pole), `theta -> theta + w (G(theta) - theta)` with `w = (r / R)^2`;
+/// `r` and `phi` are kept. Points on the axis, on the plane `z = 0` or at the centre do not
+/// move.
+fn polar_grading(p: [f64; 3], radius: f64, polar: &PolarGrading) -> [f64; 3] {
     let rho = (p[0] * p[0] + p[1] * p[1]).sqrt();
-    if polar.beta == 0.0 || rho == 0.0 || p[2] == 0.0 {
+    if polar.identity || rho == 0.0 || p[2] == 0.0 {
         return p;
     }
     let r = (rho * rho + p[2] * p[2]).sqrt();
     let theta = rho.atan2(p[2]);
-    let half_pi = std::f64::consts::FRAC_PI_2;
-    let g = half_pi * polar.map(theta / half_pi);
+    let g = polar.at(theta);
     let w = (r / radius).powi(2).min(1.0);
     let t = theta + w * (g - theta);
     let (sin, cos) = t.sin_cos();
@@ -1246,7 +1314,10 @@ mod tests {
             let n = 2000;
             let x: Vec<f64> = (0..=n).map(|i| g.map(i as f64 / n as f64)).collect();
             let dx: Vec<f64> = x.windows(2).map(|w| w[1] - w[0]).collect();
-            assert!(dx.iter().all(|&d| d > 0.0), "{ratio} {zone}: not increasing");
+            assert!(
+                dx.iter().all(|&d| d > 0.0),
+                "{ratio} {zone}: not increasing"
+            );
             // Slopes: the end over the start is the ratio.
             let end = dx[n - 1] / dx[0];
             assert!((end - ratio).abs() < 0.01 * ratio, "{ratio} {zone}: {end}");
@@ -1289,7 +1360,12 @@ mod tests {
         m.check().unwrap();
         assert!((volume(&m) - 1.0).abs() < 1e-12);
         let coords = |set: &str, d: usize| {
-            let mut v: Vec<f64> = m.node_set(set).unwrap().iter().map(|&n| m.coords[n][d]).collect();
+            let mut v: Vec<f64> = m
+                .node_set(set)
+                .unwrap()
+                .iter()
+                .map(|&n| m.coords[n][d])
+                .collect();
             v.sort_by(f64::total_cmp);
             v.dedup();
             v
@@ -1302,7 +1378,10 @@ mod tests {
         for c in &cells[..k - 1] {
             assert!((c - cells[0]).abs() < 1e-12, "{cells:?}");
         }
-        assert!(cells[k + 1] > 1.05 * cells[0] && cells[9] > 3.0 * cells[0], "{cells:?}");
+        assert!(
+            cells[k + 1] > 1.05 * cells[0] && cells[9] > 3.0 * cells[0],
+            "{cells:?}"
+        );
         // z from the top (grading below 1): the same, mirrored.
         let zs = coords("xmin", 2);
         let cz: Vec<f64> = zs.windows(2).map(|w| w[1] - w[0]).rev().collect();
@@ -1365,19 +1444,12 @@ mod tests {
                     .filter(|&n| (dist(n) - radius).abs() < 1e-9)
                     .count();
                 assert_eq!(m.node_set("sphere").unwrap().len(), on_sphere, "{what}");
-                // The planes: flat z = R (core face and two patches), symx x = 0, symy y = 0.
+                // The planes: flat z = R, symx x = 0, symy y = 0, each a face of the core and
+                // the sides of two patches.
                 let planes = [("flat", 2, radius), ("symx", 0, 0.0), ("symy", 1, 0.0)];
                 for (name, d, value) in planes {
                     let faces = m.face_set(name).unwrap();
-                    assert_eq!(
-                        faces.len(),
-                        if name == "flat" {
-                            nc * nc + 2 * nc * nr
-                        } else {
-                            nc * nc + 2 * nc * nr
-                        },
-                        "{what} {name}"
-                    );
+                    assert_eq!(faces.len(), nc * nc + 2 * nc * nr, "{what} {name}");
                     for n in m.nodes_of_set(name).unwrap() {
                         assert_eq!(m.coords[n][d], value, "{what} {name}");
                     }
@@ -1416,12 +1488,17 @@ mod tests {
                 .collect();
             theta.sort_by(f64::total_cmp);
             let steps: Vec<f64> = theta.windows(2).map(|w| w[1] - w[0]).collect();
-            let in_zone = theta.iter().filter(|&&t| t <= 0.3 + 1e-9).count() - 1;
+            // The nodes of the cells wholly inside the zone (a cell may straddle its end).
+            let cell = kind.order() as f64 * steps[0];
+            let in_zone = theta.iter().filter(|&&t| t <= 0.3 - cell + 1e-9).count() - 1;
             assert!(in_zone >= 6 * kind.order(), "{kind:?}: {theta:?}");
             for s in &steps[..in_zone] {
                 assert!((s - steps[0]).abs() < 1e-9, "{kind:?}: {steps:?}");
             }
-            assert!(steps[steps.len() - 1] > 10.0 * steps[0], "{kind:?}: {steps:?}");
+            assert!(
+                steps[steps.len() - 1] > 10.0 * steps[0],
+                "{kind:?}: {steps:?}"
+            );
             assert!((theta[theta.len() - 1] - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
         }
     }
