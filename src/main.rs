@@ -194,7 +194,11 @@ fn execute(cli: Cli, program: String) -> Result<()> {
                 "mortar: scaling.csv, scaling.png and scaling.svg in {}",
                 out.display()
             );
-            println!("speedup: {:.2}", scaling.speedup(scaling.runs.len() - 1));
+            let last = scaling.runs.len() - 1;
+            if let Some(s) = scaling.speedup_per_newton_iteration(last) {
+                println!("speedup per Newton iteration: {s:.2}");
+            }
+            println!("speedup: {:.2}", scaling.speedup(last));
             Ok(())
         }
     }

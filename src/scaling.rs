@@ -22,7 +22,10 @@
 //!
 //! The speedup of a phase on run `k` is its time on the first run over its time on run `k`
 //! (stage times are means over the ranks); the overall speedup is the ratio of the runs' wall
-//! times (`Time (sec)`, the maximum over the ranks). Outputs in `DIR` (default `out/scaling`):
+//! times (`Time (sec)`, the maximum over the ranks). A frictional scene may take a different
+//! number of Newton iterations on 1 and 2 ranks (its path depends on round-off), so the table
+//! also gives each run's Newton iterations (`SNESJacobianEval` events) and the speedup of the
+//! wall time per Newton iteration. Outputs in `DIR` (default `out/scaling`):
 //! `scaling.csv` (`phase,ranks,seconds,speedup`, the overall time as phase `total`) and
 //! `scaling.png`/`.svg` (time against ranks on log-log axes: the total, the ideal
 //! `total_1 / ranks`, and the phases of `PLOTTED`).
@@ -91,6 +94,13 @@ impl Scaling {
         self.runs[0].seconds / self.runs[k].seconds
     }
 
+    /// The speedup of run `k` over the first run in wall time per Newton iteration; `None`
+    /// when a log has no Newton iterations.
+    pub fn speedup_per_newton_iteration(&self, k: usize) -> Option<f64> {
+        let per_iteration = |r: &PetscLog| Some(r.seconds / r.newton_iterations? as f64);
+        Some(per_iteration(&self.runs[0])? / per_iteration(&self.runs[k])?)
+    }
+
     /// The table printed: one row per phase (and the total), the time of every run and the
     /// speedup of every run after the first.
     pub fn table(&self) -> String {
@@ -102,32 +112,40 @@ impl Scaling {
             let _ = write!(out, "{:>14}", format!("speedup {}", r.ranks));
         }
         out.push('\n');
-        let mut row = |name: &str, seconds: Vec<f64>| {
-            let _ = write!(out, "{name:<20}");
-            for s in &seconds {
-                let _ = write!(out, "{s:>14.4}");
-            }
-            for s in &seconds[1..] {
-                let _ = write!(out, "{:>14.2}", ratio(seconds[0], *s));
-            }
-            out.push('\n');
-        };
         for (phase, _) in PHASES {
-            row(
+            table_row(
+                &mut out,
                 phase,
                 (0..self.runs.len())
                     .map(|k| self.phase_seconds(k, phase))
                     .collect(),
             );
         }
-        row(
+        table_row(
+            &mut out,
             "total (wall)",
             self.runs.iter().map(|r| r.seconds).collect(),
         );
+        if self.runs.iter().all(|r| r.newton_iterations.is_some()) {
+            let _ = write!(out, "{:<20}", "Newton iterations");
+            for r in &self.runs {
+                let _ = write!(out, "{:>14}", r.newton_iterations.unwrap_or(0));
+            }
+            out.push('\n');
+            table_row(
+                &mut out,
+                "wall per iteration",
+                self.runs
+                    .iter()
+                    .map(|r| r.seconds / r.newton_iterations.unwrap_or(0) as f64)
+                    .collect(),
+            );
+        }
         out
     }
 
-    /// `scaling.csv`: `phase,ranks,seconds,speedup`.
+    /// `scaling.csv`: `phase,ranks,seconds,speedup` (and the wall time per Newton iteration as
+    /// phase `per_newton_iteration`, when the logs count them).
     pub fn csv(&self) -> String {
         let mut out = String::from("phase,ranks,seconds,speedup\n");
         for (k, r) in self.runs.iter().enumerate() {
@@ -137,6 +155,12 @@ impl Scaling {
                 let _ = writeln!(out, "{phase},{},{mine},{speedup}", r.ranks);
             }
             let _ = writeln!(out, "total,{},{},{}", r.ranks, r.seconds, self.speedup(k));
+            if let (Some(its), Some(speedup)) =
+                (r.newton_iterations, self.speedup_per_newton_iteration(k))
+            {
+                let per = r.seconds / its as f64;
+                let _ = writeln!(out, "per_newton_iteration,{},{per},{speedup}", r.ranks);
+            }
         }
         out
     }
@@ -184,6 +208,19 @@ impl Scaling {
     }
 }
 
+/// One row of the table: the name, the time of every run, the speedup of every run after the
+/// first.
+fn table_row(out: &mut String, name: &str, seconds: Vec<f64>) {
+    let _ = write!(out, "{name:<20}");
+    for s in &seconds {
+        let _ = write!(out, "{s:>14.4}");
+    }
+    for s in &seconds[1..] {
+        let _ = write!(out, "{:>14.2}", ratio(seconds[0], *s));
+    }
+    out.push('\n');
+}
+
 /// A speedup: `before / after`, NaN when `after` is not positive (a phase the run did not
 /// have).
 fn ratio(before: f64, after: f64) -> f64 {
@@ -203,6 +240,7 @@ mod tests {
             ranks,
             seconds,
             stages: stages.iter().map(|(n, t)| (n.to_string(), *t)).collect(),
+            newton_iterations: Some(4 * ranks),
         }
     }
 
@@ -228,8 +266,13 @@ mod tests {
         assert_eq!(s.speedup(1), 2.0);
         let csv = s.csv();
         assert!(csv.contains("linear solve,2,2.5,2.4\n"), "{csv}");
-        assert!(csv.ends_with("total,2,5,2\n"), "{csv}");
+        assert!(csv.contains("total,2,5,2\n"), "{csv}");
+        // 10 s for 4 iterations on 1 rank, 5 s for 8 on 2: 2.5 s against 0.625 s.
+        assert_eq!(s.speedup_per_newton_iteration(1), Some(4.0));
+        assert!(csv.ends_with("per_newton_iteration,2,0.625,4\n"), "{csv}");
         let table = s.table();
-        assert!(table.lines().last().unwrap().ends_with("2.00"), "{table}");
+        let total = table.lines().find(|l| l.starts_with("total")).unwrap();
+        assert!(total.ends_with("2.00"), "{table}");
+        assert!(table.lines().last().unwrap().ends_with("4.00"), "{table}");
     }
 }

@@ -27,11 +27,13 @@ fn speedup_from_the_logs_of_one_and_two_ranks() {
     let here = case.parent().unwrap();
     std::fs::copy(dir.join("petscrc"), here.join("petscrc")).unwrap();
     let mut logs = Vec::new();
+    let mut newton_its = Vec::new();
     for ranks in [1, 2] {
         let log = here.join(format!("log_{ranks}.txt"));
         let view = format!("-log_view :{}", log.display());
         let args: Vec<&str> = view.split(' ').chain(["-q"]).collect();
-        common::run_case(&case, ranks, &args);
+        let (run_out, _) = common::run_case(&case, ranks, &args);
+        newton_its.push(common::metric(&run_out, "total_newton_its"));
         logs.push(log);
     }
     let out = here.join("scaling");
@@ -52,6 +54,15 @@ fn speedup_from_the_logs_of_one_and_two_ranks() {
     let speedup = wall(&logs[0]) / wall(&logs[1]);
     let last = stdout.lines().last().unwrap();
     assert_eq!(last, format!("speedup: {speedup:.2}"), "{stdout}");
+    // The Newton iterations the logs count are the runs' own, and the speedup per iteration
+    // divides by them.
+    let per_iteration = speedup * newton_its[1] / newton_its[0];
+    assert!(
+        stdout.contains(&format!(
+            "speedup per Newton iteration: {per_iteration:.2}\n"
+        )),
+        "{per_iteration:.2} ({newton_its:?} iterations): {stdout}"
+    );
     for phase in [
         "mortar integration",
         "contact search",
@@ -69,7 +80,7 @@ fn speedup_from_the_logs_of_one_and_two_ranks() {
             .lines()
             .skip(1)
             .map(|l| l.split(',').collect::<Vec<_>>())
-            .filter(|f| f[1] == ranks && f[0] != "total")
+            .filter(|f| f[1] == ranks && f[0] != "total" && f[0] != "per_newton_iteration")
             .map(|f| f[2].parse::<f64>().unwrap())
             .sum();
         let text = std::fs::read_to_string(log).unwrap();

@@ -18,6 +18,14 @@
 //! column of its line (the mean over the ranks; PETSc's stage table has no maximum). Stage
 //! times are exclusive: a stage pushed inside another (the contact search inside the
 //! assembly) counts only in the inner one.
+//!
+//! The number of Newton iterations is the count of the `SNESJacobianEval` event (one Jacobian
+//! per Newton iteration), summed over the event tables of the stages:
+//!
+//! ```text
+//! --- Event Stage 3: solve
+//! SNESJacobianEval      66 1.0 1.4585e+01 1.0 ...
+//! ```
 
 use std::path::Path;
 
@@ -32,6 +40,8 @@ pub struct PetscLog {
     pub seconds: f64,
     /// Every log stage in the table's order: name and time (mean over the ranks), seconds.
     pub stages: Vec<(String, f64)>,
+    /// Newton iterations (`SNESJacobianEval` events); `None` when the log has no such event.
+    pub newton_iterations: Option<usize>,
 }
 
 impl PetscLog {
@@ -102,7 +112,24 @@ pub fn parse(text: &str) -> std::result::Result<PetscLog, String> {
         ranks,
         seconds,
         stages,
+        newton_iterations: event_count(text, "SNESJacobianEval"),
     })
+}
+
+/// The count of event `name` summed over the event tables of every stage (the first column
+/// after the name, the maximum over the ranks); `None` when no table lists it.
+fn event_count(text: &str, name: &str) -> Option<usize> {
+    let tables = text
+        .lines()
+        .skip_while(|l| !l.starts_with("--- Event Stage"))
+        .take_while(|l| !l.starts_with("Memory usage") && !l.starts_with("Object Type"));
+    let counts: Vec<usize> = tables
+        .filter_map(|l| {
+            let mut words = l.split_whitespace();
+            (words.next() == Some(name)).then(|| words.next()?.parse().ok())?
+        })
+        .collect();
+    (!counts.is_empty()).then(|| counts.iter().sum())
 }
 
 #[cfg(test)]
@@ -127,6 +154,27 @@ Summary of Stages:   ----- Time ------  ----- Flop ------  --- Messages ---
 
 ------------------------------------------------------------------------------------------
 See the 'Profiling' chapter of the users' manual for details on interpreting output.
+Event                Count      Time (sec)     Flop
+                   Max Ratio  Max     Ratio   Max  Ratio
+------------------------------------------------------------------------------------------
+
+--- Event Stage 0: Main Stage
+
+KSPSolve              12 1.0 9.4959e-02 1.0 7.02e+10 1.0
+
+--- Event Stage 3: solve
+
+SNESJacobianEval      66 1.0 1.4585e+01 1.0 2.29e+08 1.0
+
+--- Event Stage 6: Mortar integration
+
+SNESJacobianEval       4 1.0 1.4585e+01 1.0 2.29e+08 1.0
+
+Memory usage is given in bytes:
+
+Object Type          Creations   Destructions     Memory  Descendants' Mem.
+--- Event Stage 0: Main Stage
+SNESJacobianEval       1              1         1000     0.
 ";
 
     #[test]
@@ -143,6 +191,10 @@ See the 'Profiling' chapter of the users' manual for details on interpreting out
             ]
         );
         assert_eq!(log.stage("setup"), Some(0.011471));
+        // The event tables' counts, not the object table's.
+        assert_eq!(log.newton_iterations, Some(70));
+        let without = LOG.replace("SNESJacobianEval", "SNESOther");
+        assert_eq!(parse(&without).unwrap().newton_iterations, None);
         let one = LOG.replace("with 2 processors", "with 1 processor");
         assert_eq!(parse(&one).unwrap().ranks, 1);
     }
