@@ -22,6 +22,7 @@ pub mod io;
 pub mod material;
 pub mod mesh;
 pub mod petsc;
+pub mod scaling;
 pub mod solid;
 pub mod solver;
 pub mod study;

@@ -4,6 +4,7 @@
 //! mortar run CASE.toml [--out DIR] [--quiet] [PETSc options...]
 //! mortar check CASE.toml
 //! mortar study STUDY.toml [--out DIR] [--quiet] [PETSc options...]
+//! mortar scaling LOG_1 LOG_2 ... [--out DIR]
 //! ```
 //!
 //! Options with two dashes are ours; everything after the case file that is not ours goes to
@@ -73,6 +74,17 @@ enum Command {
         /// PETSc options, passed to PETSc unchanged.
         #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
         petsc: Vec<String>,
+    },
+    /// Strong scaling of one scene from the PETSc logs of its runs on different numbers of
+    /// ranks (`-log_view :FILE`): a table of the phases' times and speedups, scaling.csv and
+    /// a plot. The last line is `speedup: X` (the last run's over the first's).
+    Scaling {
+        /// The `-log_view` files, the reference run (fewest ranks) first.
+        #[arg(required = true, num_args = 2..)]
+        logs: Vec<PathBuf>,
+        /// Output folder. Default: out/scaling.
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
 }
 
@@ -173,6 +185,22 @@ fn execute(cli: Cli, program: String) -> Result<()> {
             quiet,
             petsc,
         } => study_command(&study, out, quiet, program, petsc),
+        Command::Scaling { logs, out } => {
+            let scaling = mortar::scaling::Scaling::read(&logs)?;
+            let out = out.unwrap_or_else(|| PathBuf::from("out/scaling"));
+            mortar::io::plot::print_warnings(scaling.write(&out)?);
+            print!("{}", scaling.table());
+            println!(
+                "mortar: scaling.csv, scaling.png and scaling.svg in {}",
+                out.display()
+            );
+            let last = scaling.runs.len() - 1;
+            if let Some(s) = scaling.speedup_per_newton_iteration(last) {
+                println!("speedup per Newton iteration: {s:.2}");
+            }
+            println!("speedup: {:.2}", scaling.speedup(last));
+            Ok(())
+        }
     }
 }
 

@@ -66,7 +66,15 @@
 //! Before any run, every variant x refinement is built and validated (paths, case keys, mesh),
 //! so a mistake in the last variant is reported at once, not after the first runs. Every run
 //! shares one PETSc: its options are the base case's options file (no variant may change
-//! `petsc_options`) and the command line.
+//! `petsc_options`), the command line, and the variant's own `petsc` options, set for its runs
+//! only (options a variant sets that no PETSc object reads draw a warning naming the variant).
+//! A variant with `ranks = k` runs on the first k ranks of the job (a split communicator); the
+//! other ranks wait for it (OpenMPI's waiting polls, so on a machine with as many cores as
+//! ranks the waiting rank takes a little of the time measured).
+//!
+//! The first run of a process pays one-time costs (loading the solver libraries, first
+//! allocations): an untimed run of the first variant at the first level comes first, into
+//! `<out>/warm_up/`, unless that variant is the `[curves]` reference (not on the front).
 //!
 //! # Curves
 //!
@@ -92,8 +100,8 @@
 //!
 //! - `runs/<variant>/<level>/`: each run's own outputs (`level` = index of the refinement). With
 //!   `[curves]`, a `history.csv` left there by an earlier study is removed before the run.
-//! - `study.csv`: one row per run, rewritten after every run: `variant, level, h, error` (the
-//!   metric; empty for a failed run), `seconds` (wall clock), `newton_its` (total over the steps
+//! - `study.csv`: one row per run, rewritten after every run: `variant, level, h, ranks,
+//!   error` (the metric, or the largest of the metrics; empty for a failed run), `seconds` (wall clock), `newton_its` (total over the steps
 //!   that converged), `converged` (`true`/`false`), `augmentations` (Uzawa, over the steps),
 //!   `peak_memory_mb` (peak resident memory of the run, largest over the ranks: Linux's
 //!   `VmHWM`, reset before each run), `on_front` (see below).
@@ -109,13 +117,17 @@
 //!   refinements.
 //! - With `[curves]`: `curves.png`, `curves.svg`: y against x on linear axes, one line per
 //!   variant (its run at the last level), `title` as the title ([`crate::io::plot::lines`]).
-//! - Without `[curves]` (the metric is an error): `pareto.png`, `pareto.svg`, the metric
-//!   against wall time on log-log axes, every converged run a point, its **Pareto front**
-//!   ringed: the runs that no other run beats in both (no more time and no larger
-//!   error, one of them strictly; [`pareto_front`]). The summary gets
-//!   `on_front_<variant>_<level>` (1 or 0) and, for the default variant (the first with no
-//!   edits: the case file as it is), `default_on_front`, the share of its runs on the front;
-//!   the closing line says it.
+//! - `pareto.png`, `pareto.svg`: the error against wall time on log-log axes, every converged
+//!   run a point, its **Pareto front** ringed: the runs that no other run beats in both (no
+//!   more time and no larger error, one of them strictly; errors at or below the study's
+//!   `error_floor` count as equal; [`pareto_front`]); variants with `reference_only = true`
+//!   are plotted but not candidates. Without `[curves]` the error is the
+//!   metric; with `[curves]` (no exact solution: the reference variant is the truth) it is a
+//!   variant's `curve_max_rel_diff` at the last level, and the reference is not on the plot.
+//!   The summary gets `on_front_<variant>_<level>` (1 or 0) and, for the default variant (the
+//!   first with no edits, no `petsc` and no `ranks`: the case file as it is),
+//!   `default_on_front`, the share of its runs on the front; the closing line says it.
+//!   `study.csv`'s `on_front` column has the flags.
 //!
 //! A failed run (not converged, a bad PETSc option, ...) is recorded (`converged = false`, no
 //! point on the convergence plot) and the study goes on; when any failed, the study returns an
@@ -147,8 +159,10 @@ pub struct StudyFile {
     /// The base scene: a case file, relative to the study file.
     pub case: String,
     /// The metric of the runs' `summary.json` measured against h (`energy_error` for the Lamé
-    /// sphere).
-    pub metric: String,
+    /// sphere), or a list of metrics whose largest absolute value is the run's error (a patch
+    /// test measures both the stress and the penetration: `["max_rel_stress_error",
+    /// "max_rel_penetration_blocks"]`, named `max(max_rel_stress_error, ...)` in the outputs).
+    pub metric: MetricSpec,
     /// Plot title (of both plots). Default: `<scene name>: <metric>` for the convergence plot,
     /// `<scene name>: <y label>` for the curves.
     pub title: Option<String>,
@@ -162,11 +176,34 @@ pub struct StudyFile {
     /// Curves of the runs' load histories to plot and compare between variants (see the module
     /// docs). Default: none.
     pub curves: Option<CurvesSpec>,
+    /// Errors at or below this value count as equal on the Pareto front (round-off: a patch
+    /// test's runs are all exact, and the fastest of them is the one to pick). Finite, >= 0.
+    /// Default 0.
+    #[serde(default)]
+    pub error_floor: f64,
     /// Checks on the study's summary metrics (`slope_* >= 1.9`; see `crate::expect`): printed
     /// with their measured values after the study, which fails when one does not hold.
     /// Default: none.
     #[serde(default)]
     pub expect: Vec<String>,
+}
+
+/// The study's `metric`: one name, or several whose largest absolute value is the error.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(untagged)]
+pub enum MetricSpec {
+    One(String),
+    Largest(Vec<String>),
+}
+
+impl MetricSpec {
+    /// The metric names.
+    fn names(&self) -> Vec<String> {
+        match self {
+            MetricSpec::One(m) => vec![m.clone()],
+            MetricSpec::Largest(ms) => ms.clone(),
+        }
+    }
 }
 
 /// The `[curves]` table: one curve per variant, from the `history.csv` of its run at the last
@@ -234,6 +271,11 @@ pub struct VariantSpec {
     /// the study fail. Default false.
     #[serde(default)]
     pub may_fail: bool,
+    /// Shown for comparison but not a choice of the scene's settings (a conforming mesh where
+    /// the scene is about dissimilar ones): its runs are plotted but never on the Pareto front.
+    /// Default false.
+    #[serde(default)]
+    pub reference_only: bool,
     /// PETSc options of this variant's runs, written as on the command line
     /// (`"-ksp_type gmres -pc_type gamg"`): put into PETSc's options database for its runs
     /// only, over the options file and the command line, and restored after each run.
@@ -246,6 +288,18 @@ pub struct VariantSpec {
     pub ranks: Option<usize>,
 }
 
+impl VariantSpec {
+    /// The scene's own settings: no edits, no PETSc options, every rank, a choice (not
+    /// `reference_only`). The study's first such variant is its defaults (`default_on_front`).
+    pub fn is_default(&self) -> bool {
+        self.set.is_empty()
+            && self.refinement_set.is_empty()
+            && self.petsc.is_none()
+            && self.ranks.is_none()
+            && !self.reference_only
+    }
+}
+
 /// A validated study.
 #[derive(Clone, Debug)]
 pub struct Study {
@@ -255,7 +309,10 @@ pub struct Study {
     pub file: PathBuf,
     /// The base case file.
     pub case: PathBuf,
+    /// The error's name in the outputs: the metric, or `max(a, b, ...)`.
     pub metric: String,
+    /// The summary metrics whose largest absolute value is a run's error.
+    pub metric_parts: Vec<String>,
     pub title: String,
     pub refinements: Vec<RefinementSpec>,
     pub variants: Vec<VariantSpec>,
@@ -265,6 +322,8 @@ pub struct Study {
     pub petsc_options: Option<PathBuf>,
     /// The `[curves]` table, validated.
     pub curves: Option<Curves>,
+    /// Errors at or below this count as equal on the Pareto front (`error_floor`).
+    pub error_floor: f64,
     /// Checks on the study's metrics (`expect`).
     pub expectations: Vec<crate::expect::Expectation>,
 }
@@ -336,7 +395,8 @@ impl Study {
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_else(|| "study".into());
-        if file.metric.trim().is_empty() {
+        let metric_parts = file.metric.names();
+        if metric_parts.is_empty() || metric_parts.iter().any(|m| m.trim().is_empty()) {
             return Err(err("metric: empty".into()));
         }
         if file.curves.is_none() && file.refinement.len() < 2 {
@@ -344,6 +404,12 @@ impl Study {
                 "refinement: at least 2 are needed for a slope, found {} (a study with [curves] \
                  may have 1)",
                 file.refinement.len()
+            )));
+        }
+        if !(file.error_floor.is_finite() && file.error_floor >= 0.0) {
+            return Err(err(format!(
+                "error_floor = {}: must be finite and >= 0",
+                file.error_floor
             )));
         }
         if file.refinement.is_empty() {
@@ -454,8 +520,12 @@ impl Study {
             .iter()
             .enumerate()
             .map(|(i, v)| {
-                crate::petsc::options::parse(v.petsc.as_deref().unwrap_or(""))
-                    .map_err(|m| err(format!("variant[{i}].petsc = \"{}\": {m}", v.petsc.as_deref().unwrap_or(""))))
+                crate::petsc::options::parse(v.petsc.as_deref().unwrap_or("")).map_err(|m| {
+                    err(format!(
+                        "variant[{i}].petsc = \"{}\": {m}",
+                        v.petsc.as_deref().unwrap_or("")
+                    ))
+                })
             })
             .collect::<Result<Vec<_>>>()?;
         let mut study = Study {
@@ -463,12 +533,17 @@ impl Study {
             variant_options,
             file: path.to_path_buf(),
             case,
-            metric: file.metric.clone(),
+            metric: match metric_parts.as_slice() {
+                [one] => one.clone(),
+                many => format!("max({})", many.join(", ")),
+            },
+            metric_parts,
             title: String::new(),
             refinements: file.refinement,
             variants: file.variant,
             petsc_options: None,
             curves: None,
+            error_floor: file.error_floor,
             expectations: crate::expect::parse_all("expect", &file.expect).map_err(err)?,
         };
         // Every run's scene, built and dropped one at a time.
@@ -507,7 +582,8 @@ impl Study {
                 if scene.petsc_options != study.petsc_options {
                     return Err(err(format!(
                         "variant '{}' at refinement[{j}] changes petsc_options: every run of a \
-                         study shares one PETSc (give options on the command line instead)",
+                         study shares one PETSc (give options on the command line or in the \
+                         variant's petsc key instead)",
                         study.variants[i].name
                     )));
                 }
@@ -571,6 +647,22 @@ impl Study {
             petsc.size(),
             out.display()
         ));
+        let first_is_reference = self
+            .curves
+            .as_ref()
+            .is_some_and(|c| c.reference == self.variants[0].name);
+        if !first_is_reference {
+            // The first run of a process pays one-time costs (loading the solver libraries,
+            // first allocations) that would tilt the comparison of wall times against the
+            // first variant: an untimed run of the first variant's first level comes first
+            // (not when that variant is the curves' reference, which is not on the front).
+            let warm_up = out.join("warm_up");
+            if let Some(Err(e)) = self.run_one(petsc, 0, 0, &warm_up)? {
+                if !e.is_collective() {
+                    return Err(e);
+                }
+            }
+        }
         let mut runs: Vec<RunRecord> = Vec::with_capacity(total);
         let mut summary = Summary::default();
         // The curves' columns, checked against the first history written.
@@ -584,23 +676,10 @@ impl Study {
                 }
                 reset_peak_memory();
                 let ranks = variant.ranks.unwrap_or(job_size);
-                let options = crate::petsc::options::Override::set(&self.variant_options[v])?;
                 let t0 = Instant::now();
-                // `None` on the ranks that wait while the variant runs on fewer.
-                let result = petsc.on_first_ranks(ranks, || {
-                    self.scene(v, level).and_then(|scene| {
-                        solver::run(
-                            &scene,
-                            petsc,
-                            &RunOptions {
-                                out_dir: run_dir.clone(),
-                                quiet: true,
-                            },
-                        )
-                    })
-                });
+                let result = self.run_one(petsc, v, level, &run_dir)?;
+                let mut missing_metric = None;
                 let seconds = t0.elapsed().as_secs_f64();
-                drop(options);
                 // Every rank takes part (-1: not available there).
                 let local = peak_memory_mb().unwrap_or(-1.0);
                 let mut most = 0.0f64;
@@ -629,20 +708,18 @@ impl Study {
                         record.message = s.message.clone();
                     }
                     Some(Ok(s)) => {
-                        let Some(&e) = s.metrics.get(&self.metric) else {
-                            return Err(Error::Case {
-                                file: self.file.clone(),
-                                msg: format!(
-                                    "metric = \"{}\": the runs do not report it (they report: {})",
-                                    self.metric,
-                                    s.metrics.keys().cloned().collect::<Vec<_>>().join(", ")
-                                ),
-                            });
-                        };
-                        record.error = Some(e);
-                        record.converged = true;
                         record.newton_its = s.steps.iter().map(|st| st.newton_its).sum();
                         record.augmentations = s.steps.iter().map(|st| st.augmentations).sum();
+                        match self.error_of(&s) {
+                            Ok(e) if e.is_finite() => {
+                                record.error = Some(e);
+                                record.converged = true;
+                            }
+                            Ok(e) => {
+                                record.message = Some(format!("{} = {e}", self.metric));
+                            }
+                            Err(msg) => missing_metric = Some(msg),
+                        }
                     }
                     // Errors every rank meets alike are this run's failure; any other (an I/O
                     // error on one rank) ends the study, as it ends a run.
@@ -656,7 +733,13 @@ impl Study {
                     }
                     Some(Err(e)) => return Err(e),
                 }
-                share_record(petsc, &mut record);
+                // After the broadcast, so that ranks that waited (`ranks`) stop with the others.
+                if share_record(petsc, &mut record, missing_metric.is_some()) {
+                    return Err(Error::Case {
+                        file: self.file.clone(),
+                        msg: missing_metric.unwrap_or_default(),
+                    });
+                }
                 say(progress_line(&self.metric, &record));
                 runs.push(record);
                 if rank == 0 {
@@ -670,7 +753,7 @@ impl Study {
             }
         }
         if self.curves.is_none() {
-            for i in pareto_front(&runs) {
+            for i in self.front(&runs) {
                 runs[i].on_front = true;
             }
         }
@@ -694,7 +777,7 @@ impl Study {
                     &self.metric,
                     &series,
                 )?;
-                warn(warnings);
+                plot::print_warnings(warnings);
                 let slopes: Vec<String> = self
                     .variants
                     .iter()
@@ -710,10 +793,20 @@ impl Study {
                 done.push(format!("slopes {}", slopes.join(", ")));
             }
             if self.curves.is_none() {
-                done.push(self.write_pareto(&runs, &mut summary, out)?);
+                done.push(self.write_pareto(&runs, &self.metric, &mut summary, out)?);
+                write_atomic(&out.join("study.csv"), study_csv(&runs).as_bytes())?;
             }
             if let Some(curves) = &self.curves {
                 let figures = self.write_curves(curves, out)?;
+                // The Pareto front of the curves' difference to the reference against time.
+                let mut scored = curve_scores(&runs, curves, &figures, self.refinements.len() - 1);
+                for i in self.front(&scored) {
+                    runs[i].on_front = true;
+                    scored[i].on_front = true;
+                }
+                let label = format!("{} to {}", curves.metric, curves.reference);
+                done.push(self.write_pareto(&scored, &label, &mut summary, out)?);
+                write_atomic(&out.join("study.csv"), study_csv(&runs).as_bytes())?;
                 for (name, d) in &figures.differences {
                     if let Some(d) = d {
                         summary
@@ -780,6 +873,81 @@ impl Study {
         Ok(StudyReport { runs, summary })
     }
 
+    /// The runs on the Pareto front ([`pareto_front`] with the study's `error_floor`), among
+    /// the runs of the variants that are choices (not `reference_only`).
+    fn front(&self, runs: &[RunRecord]) -> Vec<usize> {
+        let choices: Vec<RunRecord> = runs
+            .iter()
+            .map(|r| {
+                let reference = self
+                    .variants
+                    .iter()
+                    .any(|v| v.name == r.variant && v.reference_only);
+                RunRecord {
+                    converged: r.converged && !reference,
+                    ..r.clone()
+                }
+            })
+            .collect();
+        pareto_front(&choices, self.error_floor)
+    }
+
+    /// A converged run's error: its metric, or the largest absolute value of the metrics (NaN
+    /// if one is not finite); `Err` names a metric the run does not report.
+    fn error_of(&self, run: &Summary) -> std::result::Result<f64, String> {
+        let mut error = 0.0f64;
+        for part in &self.metric_parts {
+            let Some(&e) = run.metrics.get(part) else {
+                return Err(format!(
+                    "metric \"{part}\": the runs do not report it (they report: {})",
+                    run.metrics.keys().cloned().collect::<Vec<_>>().join(", ")
+                ));
+            };
+            error = match self.metric_parts.len() {
+                1 => e,
+                _ if !e.is_finite() || error.is_nan() => f64::NAN,
+                _ => error.max(e.abs()),
+            };
+        }
+        Ok(error)
+    }
+
+    /// Runs variant `v` at refinement `level` into `run_dir`, with the variant's PETSc options
+    /// and on its ranks: `None` on the ranks that wait while it runs on fewer. The error is the
+    /// run's (to record); `Err` only if the variant's options cannot be set.
+    fn run_one(
+        &self,
+        petsc: &Petsc,
+        v: usize,
+        level: usize,
+        run_dir: &Path,
+    ) -> Result<Option<Result<Summary>>> {
+        let ranks = self.variants[v].ranks.unwrap_or(petsc.size());
+        let options = crate::petsc::options::Override::set(&self.variant_options[v])?;
+        let result = petsc.on_first_ranks(ranks, || {
+            self.scene(v, level).and_then(|scene| {
+                solver::run(
+                    &scene,
+                    petsc,
+                    &RunOptions {
+                        out_dir: run_dir.to_path_buf(),
+                        quiet: true,
+                    },
+                )
+            })
+        });
+        let unused = options.unused();
+        if petsc.rank() == 0 && !unused.is_empty() {
+            eprintln!(
+                "mortar: warning: variant '{}': PETSc option(s) {} not used (a typo, or an \
+                 option of a solver not in use)",
+                self.variants[v].name,
+                unused.join(", ")
+            );
+        }
+        Ok(result)
+    }
+
     /// Checks the `[curves]` columns against the `history.csv` in `run_dir` (rank 0), and
     /// shares the verdict with every rank: false if there is no history yet (the run failed
     /// before its first step), true if the columns are there; an error on every rank (naming the
@@ -817,18 +985,21 @@ impl Study {
         }
     }
 
-    /// The Pareto front of error against wall time (the flags are set on `runs`): `pareto.png`
-    /// and `.svg` (every converged run a point, one line per variant, the front ringed),
-    /// `study.csv` rewritten with the flags, the summary's `on_front_<variant>_<level>` and,
-    /// for the default variant (the first without edits: the case file as it is),
-    /// `default_on_front` (the share of its runs on the front). Returns the progress note.
+    /// The Pareto front of error against wall time (the flags are set on `runs`, labelled
+    /// `metric`): `pareto.png` and `.svg` (every converged run a point, one line per variant,
+    /// the front ringed), the summary's `on_front_<variant>_<level>` and, for the default
+    /// variant ([`VariantSpec::is_default`]), `default_on_front` (the share of its runs on the
+    /// front). Returns the progress note.
     fn write_pareto(
         &self,
         runs: &[RunRecord],
+        metric: &str,
         summary: &mut Summary,
         out: &Path,
     ) -> Result<String> {
-        let point = |r: &RunRecord| r.error.map(|e| (r.seconds, e.abs()));
+        // Errors at or below the floor are plotted at the floor (they count as equal; an exact
+        // 0 would not show on log axes).
+        let point = |r: &RunRecord| r.error.map(|e| (r.seconds, e.abs().max(self.error_floor)));
         let series: Vec<plot::Series> = self
             .variants
             .iter()
@@ -848,17 +1019,16 @@ impl Study {
                 }
             })
             .collect();
-        warn(plot::loglog_points(
+        plot::print_warnings(plot::loglog_points(
             &out.join("pareto"),
             &format!(
-                "{}: {} against wall time (ringed: Pareto front)",
-                self.name, self.metric
+                "{}: {metric} against wall time (ringed: Pareto front)",
+                self.name
             ),
             "wall time (s)",
-            &self.metric,
+            metric,
             &series,
         )?);
-        write_atomic(&out.join("study.csv"), study_csv(runs).as_bytes())?;
         for r in runs.iter().filter(|r| r.converged) {
             summary.metrics.insert(
                 format!("on_front_{}_{}", r.variant, r.level),
@@ -866,19 +1036,8 @@ impl Study {
             );
         }
         let front = runs.iter().filter(|r| r.on_front).count();
-        let mut note = format!(
-            "Pareto front of {} against wall time: {front} run(s)",
-            self.metric
-        );
-        let default = self
-            .variants
-            .iter()
-            .find(|v| {
-                v.set.is_empty()
-                    && v.refinement_set.is_empty()
-                    && v.petsc.is_none()
-                    && v.ranks.is_none()
-            });
+        let mut note = format!("Pareto front of {metric} against wall time: {front} run(s)");
+        let default = self.variants.iter().find(|v| v.is_default());
         if let Some(d) = default {
             let mine: Vec<&RunRecord> = runs
                 .iter()
@@ -946,7 +1105,7 @@ impl Study {
                 flagged,
             });
         }
-        warn(plot::lines(
+        plot::print_warnings(plot::lines(
             &out.join("curves"),
             &curves.title,
             &curves.x_label,
@@ -1138,13 +1297,6 @@ fn interpolate(curve: &[(f64, f64)], x: f64) -> Option<f64> {
     Some(a.1 + (x - a.0) / (b.0 - a.0) * (b.1 - a.1))
 }
 
-/// Prints plot warnings.
-fn warn(warnings: Vec<String>) {
-    for w in warnings {
-        eprintln!("mortar: warning: {w}");
-    }
-}
-
 /// The `(h, error)` points of a variant's converged runs.
 fn points_of(runs: &[RunRecord], variant: &str) -> Vec<(f64, f64)> {
     runs.iter()
@@ -1168,16 +1320,45 @@ fn progress_line(metric: &str, r: &RunRecord) -> String {
     )
 }
 
+/// The runs scored by their curves ([`Study::write_curves`]): at the last level, every variant
+/// but the reference has its curve's difference to the reference as its error (none when its
+/// curve has no overlap with the reference's); the reference (the truth of the comparison) and
+/// the other levels have none, so they are not on the Pareto front.
+fn curve_scores(
+    runs: &[RunRecord],
+    curves: &Curves,
+    figures: &CurveFigures,
+    last_level: usize,
+) -> Vec<RunRecord> {
+    runs.iter()
+        .map(|r| {
+            let difference = figures
+                .differences
+                .iter()
+                .find(|(name, _)| *name == r.variant)
+                .and_then(|(_, d)| *d)
+                .filter(|_| r.level == last_level && r.variant != curves.reference);
+            RunRecord {
+                error: difference,
+                converged: r.converged && difference.is_some(),
+                ..r.clone()
+            }
+        })
+        .collect()
+}
+
 /// Gives every rank rank 0's figures of a run (rank 0 runs every variant; the others may have
-/// waited, and their clocks differ), so that all ranks agree on the study's outcome. The
-/// failure message stays on rank 0, which prints it.
-fn share_record(petsc: &Petsc, r: &mut RunRecord) {
+/// waited, and their clocks differ), so that all ranks agree on the study's outcome, and
+/// returns rank 0's `fatal` (the study must stop). The failure message stays on rank 0, which
+/// prints it.
+fn share_record(petsc: &Petsc, r: &mut RunRecord, fatal: bool) -> bool {
     let mut figures = [
         r.error.unwrap_or(f64::NAN),
         r.seconds,
         r.newton_its as f64,
         r.augmentations as f64,
         f64::from(u8::from(r.converged)),
+        f64::from(u8::from(fatal)),
     ];
     petsc
         .world()
@@ -1188,6 +1369,7 @@ fn share_record(petsc: &Petsc, r: &mut RunRecord) {
     r.newton_its = figures[2] as usize;
     r.augmentations = figures[3] as usize;
     r.converged = figures[4] != 0.0;
+    figures[5] != 0.0
 }
 
 /// `study.csv` of the runs so far.
@@ -1197,7 +1379,8 @@ fn study_csv(runs: &[RunRecord]) -> String {
          on_front\n",
     );
     for r in runs {
-        let error = r.error.map(|e| e.to_string()).unwrap_or_default();
+        // Exponent form: errors at round-off would print as 0.0000000000001767...
+        let error = r.error.map(|e| format!("{e:e}")).unwrap_or_default();
         let memory = r
             .peak_memory_mb
             .map(|m| format!("{m:.1}"))
@@ -1222,8 +1405,9 @@ fn study_csv(runs: &[RunRecord]) -> String {
 
 /// The runs on the Pareto front of error against wall time: converged runs with a finite
 /// error that no other such run beats in both (no more time and no larger error, one of them
-/// strictly). Indices into `runs`, ascending.
-pub fn pareto_front(runs: &[RunRecord]) -> Vec<usize> {
+/// strictly), errors at or below `error_floor` counting as equal. Indices into `runs`,
+/// ascending.
+pub fn pareto_front(runs: &[RunRecord], error_floor: f64) -> Vec<usize> {
     let points: Vec<(usize, f64, f64)> = runs
         .iter()
         .enumerate()
@@ -1231,7 +1415,7 @@ pub fn pareto_front(runs: &[RunRecord]) -> Vec<usize> {
         .filter_map(|(i, r)| {
             r.error
                 .filter(|e| e.is_finite())
-                .map(|e| (i, r.seconds, e.abs()))
+                .map(|e| (i, r.seconds, e.abs().max(error_floor)))
         })
         .collect();
     points
@@ -1416,8 +1600,10 @@ mod tests {
             run("failed", 0.1, None, false),
             run("middle", 3.0, Some(-1e-3), true),
         ];
-        assert_eq!(pareto_front(&runs), vec![0, 1, 5]);
-        assert!(pareto_front(&[]).is_empty());
+        assert_eq!(pareto_front(&runs, 0.0), vec![0, 1, 5]);
+        assert!(pareto_front(&[], 0.0).is_empty());
+        // Below the floor, errors are equal: the slow fine run is beaten by the fast one.
+        assert_eq!(pareto_front(&runs, 1e-2), vec![0]);
     }
 
     #[test]
@@ -1560,7 +1746,7 @@ count = 1
             study_csv(&[r, failed]),
             "variant,level,h,ranks,error,seconds,newton_its,converged,augmentations,\
              peak_memory_mb,on_front\n\
-             hex8,1,0.5,2,0.125,2.5,1,true,2,12.5,true\n\
+             hex8,1,0.5,2,1.25e-1,2.5,1,true,2,12.5,true\n\
              hex8,1,0.5,2,,2.5,1,false,2,,false\n"
         );
     }

@@ -88,6 +88,20 @@ young = 1000.0
 poisson = 0.3
 "#;
 
+/// A quarter hemisphere without its radius.
+const HEMISPHERE_NO_RADIUS: &str = r#"[[mesh]]
+body = "ball"
+generator = "hemisphere_quarter"
+element = "hex8"
+n_circ = 2
+n_rad = 1
+
+[[material]]
+model = "linear_elastic"
+young = 1000.0
+poisson = 0.3
+"#;
+
 /// The subcommand a row runs.
 #[derive(Clone, Copy, Debug)]
 enum Sub {
@@ -244,6 +258,30 @@ fn rows() -> Vec<Row> {
             "sphere_outer_not_above_inner",
             text(SPHERE_SWAPPED_RADII),
             "outer_radius",
+        ),
+        check(
+            "hemisphere_without_radius",
+            text(HEMISPHERE_NO_RADIUS),
+            "mesh[0].radius",
+        ),
+        check(
+            "hemisphere_of_tetrahedra",
+            text(&edit(
+                &HEMISPHERE_NO_RADIUS.replace("n_rad = 1", "n_rad = 1\nradius = 1.0"),
+                r#""hex8""#,
+                r#""tet4""#,
+            )),
+            "mesh[0].element",
+        ),
+        check(
+            "hemisphere_pole_grading_below_one",
+            text(&HEMISPHERE_NO_RADIUS.replace("n_rad = 1", "n_rad = 1\nradius = 1.0\npole_grading = 0.5")),
+            "mesh[0].pole_grading",
+        ),
+        check(
+            "box_grading_zero",
+            valid_with("divisions = [1, 1, 1]", "divisions = [1, 1, 1]\ngrading = [1.0, 0.0, 1.0]"),
+            "mesh[0].grading",
         ),
         // --- Gmsh files.
         run("missing_gmsh_file", text(GMSH), "mesh.msh"),
@@ -519,8 +557,28 @@ value = [0.0, 0.0, -1.0]
         ),
         check(
             "verification_kind_unknown",
-            valid_plus("[verification]\nkind = \"hertz\"\n"),
-            "hertz",
+            valid_plus("[verification]\nkind = \"boussinesq\"\n"),
+            "boussinesq",
+        ),
+        check(
+            "hertz_without_interface",
+            valid_plus("[verification]\nkind = \"hertz\"\nradius = 1.0\nmodel_fraction = 0.25\n"),
+            "verification.interface",
+        ),
+        check(
+            "hertz_without_radius",
+            valid_plus("[verification]\nkind = \"hertz\"\ninterface = \"i\"\nmodel_fraction = 0.25\n"),
+            "verification.radius",
+        ),
+        check(
+            "hertz_on_a_missing_interface",
+            valid_plus("[verification]\nkind = \"hertz\"\nradius = 1.0\ninterface = \"nowhere\"\nmodel_fraction = 0.25\n"),
+            "nowhere",
+        ),
+        check(
+            "hertz_with_a_lame_key",
+            valid_plus("[verification]\nkind = \"hertz\"\nradius = 1.0\ninterface = \"i\"\nmodel_fraction = 0.25\ninner_radius = 1.0\n"),
+            "verification.inner_radius",
         ),
         // --- PETSc options, on the command line and in a file.
         check(

@@ -122,7 +122,10 @@ set = { "mesh.0.element" = "hex20" }
         rows.iter()
             .zip([("hex8", "0"), ("hex8", "1"), ("hex20", "0"), ("hex20", "1")])
     {
-        assert_eq!((row["variant"].as_str(), row["level"].as_str()), (variant, level));
+        assert_eq!(
+            (row["variant"].as_str(), row["level"].as_str()),
+            (variant, level)
+        );
         assert!(row["error"].parse::<f64>().unwrap() > 0.0, "{row:?}");
         assert_eq!(row["converged"], "true");
     }
@@ -161,7 +164,13 @@ set = { "mesh.0.element" = "hex20" }
     // run, every run off it is; the plot exists; peak memory is recorded.
     let pts: Vec<(f64, f64, bool)> = rows
         .iter()
-        .map(|r| (r["seconds"].parse().unwrap(), r["error"].parse().unwrap(), r["on_front"] == "true"))
+        .map(|r| {
+            (
+                r["seconds"].parse().unwrap(),
+                r["error"].parse().unwrap(),
+                r["on_front"] == "true",
+            )
+        })
         .collect();
     let beaten = |i: usize| {
         let (t, e, _) = pts[i];
@@ -172,13 +181,17 @@ set = { "mesh.0.element" = "hex20" }
     for (i, p) in pts.iter().enumerate() {
         assert_eq!(p.2, !beaten(i), "run {i}: {rows:?}");
         assert_eq!(
-            metric(&format!("on_front_{}_{}", rows[i]["variant"], rows[i]["level"])),
+            metric(&format!(
+                "on_front_{}_{}",
+                rows[i]["variant"], rows[i]["level"]
+            )),
             f64::from(u8::from(p.2))
         );
     }
     assert!(pts.iter().any(|p| p.2));
     assert!(
-        rows.iter().all(|r| r["peak_memory_mb"].parse::<f64>().unwrap() > 1.0),
+        rows.iter()
+            .all(|r| r["peak_memory_mb"].parse::<f64>().unwrap() > 1.0),
         "{rows:?}"
     );
     assert!(out.join("pareto.png").is_file() && out.join("pareto.svg").is_file());
@@ -264,7 +277,11 @@ set = { "mesh.0.element" = "hex8" }
     assert_eq!(rows.len(), 4, "{rows:?}");
     for r in &rows {
         let stuck = r["variant"] == "stuck";
-        assert_eq!(r["converged"], if stuck { "false" } else { "true" }, "{r:?}");
+        assert_eq!(
+            r["converged"],
+            if stuck { "false" } else { "true" },
+            "{r:?}"
+        );
         assert_eq!(r["error"].is_empty(), stuck, "{r:?}");
     }
     let s = common::summary(&out);
@@ -398,6 +415,17 @@ set = { "steps.count" = 4 }
     for (soft, stiff) in last("soft").iter().zip(last("stiff")) {
         assert!(*soft < 0.0 && ((stiff - soft) / soft - 1.0).abs() < 1e-9);
     }
+
+    // The Pareto front of the curve difference against time: the reference is the truth (not
+    // on it), the other variants are scored at the last level only.
+    assert!(out.join("pareto.png").is_file() && out.join("pareto.svg").is_file());
+    for r in csv_rows(&out) {
+        let on = r["variant"] == "stiff" && r["level"] == "1";
+        assert_eq!(r["on_front"], on.to_string(), "{r:?}");
+    }
+    let s = common::summary(&out);
+    assert_eq!(s["metrics"]["on_front_stiff_1"].as_f64(), Some(1.0));
+    assert!(s["metrics"].get("on_front_soft_1").is_none());
 }
 
 /// A variant with `may_fail = true` (a baseline expected to break) fails without failing the
@@ -540,7 +568,9 @@ fn one_refinement_needs_curves_and_curves_keys_are_checked() {
 /// The knobs a study sweeps besides the case's keys, on a 2-rank job: a variant on 1 rank
 /// (`ranks = 1`) gives the 2-rank run's error to 1e-10 relative; a variant's PETSc options
 /// reach its runs only (an impossible `-ksp_type` fails that variant's runs, and the variants
-/// after it run as before); a converging iterative solver gives the direct solve's error.
+/// after it run as before); `-pc_type` alone gets GMRES around it (the solver's defaults of the
+/// earlier runs, `-ksp_type preonly` among them, do not leak into it) and gives the direct
+/// solve's error.
 #[test]
 fn variants_sweep_ranks_and_petsc_options() {
     let dir = study_dir(
@@ -561,7 +591,7 @@ may_fail = true
 
 [[variant]]
 name = "gmres"
-petsc = "-ksp_type gmres -pc_type jacobi -ksp_rtol 1e-13 -ksp_max_it 5000"
+petsc = "-pc_type jacobi -ksp_rtol 1e-13 -ksp_max_it 5000"
 "#,
         ),
     );
@@ -594,4 +624,37 @@ petsc = "-ksp_type gmres -pc_type jacobi -ksp_rtol 1e-13 -ksp_max_it 5000"
     );
     // The first variant has no edits: it is the study's defaults.
     assert!(s["metrics"]["default_on_front"].as_f64().is_some(), "{s}");
+}
+
+/// `metric` as a list: a run's error is the largest of the metrics (checked against each run's
+/// own summary); a negative `error_floor` is refused with one line naming the key.
+#[test]
+fn the_error_may_be_the_largest_of_several_metrics() {
+    let study = small_study("[[variant]]\nname = \"hex8\"\n").replace(
+        "metric = \"energy_error\"",
+        "metric = [\"energy_error\", \"free_dofs\"]",
+    );
+    let dir = study_dir("study_metric_list", &study);
+    let o = run_study(&dir, &["-q"]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let out = dir.join("out");
+    for r in csv_rows(&out) {
+        let run = common::summary(&out.join(format!("runs/hex8/{}", r["level"])));
+        let m = |k: &str| run["metrics"][k].as_f64().unwrap();
+        let want = m("energy_error").abs().max(m("free_dofs"));
+        assert_eq!(r["error"].parse::<f64>().unwrap(), want, "{r:?}");
+    }
+
+    let dir = study_dir(
+        "study_error_floor",
+        &format!(
+            "error_floor = -1.0\n{}",
+            small_study("[[variant]]\nname = \"a\"\n")
+        ),
+    );
+    let o = run_study(&dir, &["-q"]);
+    let stderr = text(&o.stderr);
+    assert!(!o.status.success());
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("error_floor = -1"), "{stderr}");
 }

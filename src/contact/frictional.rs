@@ -264,7 +264,9 @@ pub struct ContactInterfaces {
 }
 
 /// The contact work of the residual and tangent evaluations, each a PETSc log stage and a
-/// wall-clock total (the output and Uzawa evaluations are not counted).
+/// wall-clock total. The reactions of the output go through the same evaluation, so the log
+/// stages count them too; the solver takes the totals' increase over each Newton solve for
+/// `summary.json`. (The output's and Uzawa's field evaluations are not timed.)
 #[derive(Clone, Debug)]
 pub struct ContactTimings {
     /// The search: the primary faces' tree and the candidate pairs.
@@ -486,13 +488,16 @@ impl ContactInterfaces {
                     }
                     continue;
                 }
-                let candidates =
-                    timed
-                        .search
-                        .time(|| pass.candidates(&x, &pass.local_faces, EVAL_MARGIN));
+                let candidates = timed
+                    .search
+                    .time(|| pass.candidates(&x, &pass.local_faces, EVAL_MARGIN));
                 let integrated = timed.integration.time(|| {
-                    pass.normals(&x)
-                        .map(|normals| (normals, pass.integrate(&ctx, candidates, tangent, &mut stats)))
+                    pass.normals(&x).map(|normals| {
+                        (
+                            normals,
+                            pass.integrate(&ctx, candidates, tangent, &mut stats),
+                        )
+                    })
                 });
                 let (normals, pairs) = match integrated {
                     Ok(n) => n,

@@ -100,9 +100,10 @@ pub struct MeshPart {
     /// bodies from 3D physical groups and their set names as written in the file.
     #[serde(default = "default_body")]
     pub body: String,
-    /// `"box"`, `"beam"`, `"thick_sphere_octant"` or `"gmsh"`.
+    /// `"box"`, `"beam"`, `"thick_sphere_octant"`, `"hemisphere_quarter"` or `"gmsh"`.
     pub generator: String,
-    /// Element type of generated parts: `hex8`, `hex20`, `hex27`, `tet4`, `tet10`.
+    /// Element type of generated parts: `hex8`, `hex20`, `hex27`, `tet4`, `tet10`
+    /// (hemisphere_quarter: hexahedra only).
     pub element: Option<String>,
     /// box, beam: elements along x, y, z.
     pub divisions: Option<[usize; 3]>,
@@ -110,17 +111,44 @@ pub struct MeshPart {
     pub lo: Option<[f64; 3]>,
     /// box: upper corner.
     pub hi: Option<[f64; 3]>,
+    /// box: geometric grading per axis, the last cell's length over the first's (cells grow in
+    /// a constant ratio; 1 = uniform, > 1 finer toward `lo`, < 1 finer toward `hi`), each
+    /// finite and > 0. Default `[1, 1, 1]`.
+    pub grading: Option<[f64; 3]>,
+    /// box: per axis, the length from the fine end (`lo` for a grading above 1, `hi` below 1)
+    /// that keeps uniform cells before they grow; `grading` is then the spacing at the coarse
+    /// end over the zone's. Each in `[0, hi - lo)`. Default `[0, 0, 0]` (no zone).
+    pub grading_zone: Option<[f64; 3]>,
     /// beam: length (x), width (y), height (z).
     pub length: Option<f64>,
     pub width: Option<f64>,
     pub height: Option<f64>,
-    /// thick_sphere_octant: elements along each side of each of the three surface patches.
+    /// thick_sphere_octant, hemisphere_quarter: elements along each side of each of the three
+    /// surface patches (hemisphere_quarter: and of its core cube).
     pub n_circ: Option<usize>,
-    /// thick_sphere_octant: elements through the thickness.
+    /// thick_sphere_octant: elements through the thickness; hemisphere_quarter: through the
+    /// shell between the core cube and the sphere.
     pub n_rad: Option<usize>,
     /// thick_sphere_octant: radii.
     pub inner_radius: Option<f64>,
     pub outer_radius: Option<f64>,
+    /// hemisphere_quarter: the radius R. The part is the quarter `x, y >= 0` of the solid
+    /// hemisphere with its pole at the origin, its centre at `(0, 0, R)` and its flat face at
+    /// `z = R` (move it with `translate`); sets `<body>.sphere` (the spherical surface),
+    /// `<body>.flat`, `<body>.symx` (x = 0), `<body>.symy` (y = 0). See
+    /// `mesh::generate::hemisphere_quarter`.
+    pub radius: Option<f64>,
+    /// hemisphere_quarter: grading toward the pole, the polar-angle spacing of the surface
+    /// nodes at the equator over that at the pole (>= 1; 1 = none). Default 1.
+    pub pole_grading: Option<f64>,
+    /// hemisphere_quarter: the arc length from the pole (on the sphere) over which the polar
+    /// spacing stays uniform (the fine cap, where the contact is) before it grows; with it,
+    /// `pole_grading` is the spacing at the equator over the cap's. Default 0: the spacing
+    /// grows from the pole on.
+    pub pole_zone: Option<f64>,
+    /// hemisphere_quarter: grading of the shell toward the surface, the innermost layer's
+    /// thickness over the outermost's (>= 1; 1 = uniform). Default 1.
+    pub radial_grading: Option<f64>,
     /// gmsh: the .msh file (format 4.1, ASCII or binary).
     pub file: Option<String>,
     /// Moves every node of the part by this vector after generation. Default: none.
@@ -282,11 +310,13 @@ pub struct InterfaceSpec {
     /// penetration gh_A of every pressed node; default 1e-6.
     pub uzawa_tol: Option<f64>,
     /// Contact with friction: augmentations also go on while the slip |dsh_A| of a sticking
-    /// node is above this fraction of h_A. Default 1e-4: with the default tangential penalty a
-    /// plain Uzawa update removes only part of a sticking node's slip (measured on the sliding
-    /// blocks: 4.2e-4 h after the first solve of a step, then 1.7e-4, 1.1e-4, 7.9e-5, and a
-    /// factor 0.88 per augmentation later), so 1e-4 takes about 3 augmentations per stick step
-    /// and 1e-6 would exceed any sensible `uzawa_max`.
+    /// node is above this fraction of h_A. Default 1e-3, from the Pareto front of
+    /// `cases/sliding_blocks/study_uzawa.toml` (one pass, Hex27): at most 4 augmentations per
+    /// step and the force curve within 7.5e-6 of a run at 1e-5; 1e-4 takes up to 10 per step
+    /// (6 steps above 5) for a curve within 1.4e-6, 30 % more time. With the default tangential
+    /// penalty a plain Uzawa update removes only part of a sticking node's slip (4.2e-4 h after
+    /// the first solve of a step, then 1.7e-4, 1.1e-4, 7.9e-5, and a factor 0.88 per
+    /// augmentation later), so much tighter tolerances exceed any sensible `uzawa_max`.
     pub uzawa_slip_tol: Option<f64>,
     /// At most this many augmentations per load step (0: plain penalty). Default 0 for two
     /// passes: on dissimilar meshes the two passes' weak conditions cannot both hold exactly,
@@ -463,9 +493,14 @@ impl Default for OutputSpec {
 pub struct VerificationSpec {
     /// `"lame_sphere"` (thick sphere under inner pressure; the metric `energy_error`),
     /// `"uniform_strain"` (a linear displacement field u = G X; metrics `max_displacement_error`
-    /// and `max_stress_error`) or `"contact_patch"` (a uniform Cauchy stress everywhere and a
+    /// and `max_stress_error`), `"contact_patch"` (a uniform Cauchy stress everywhere and a
     /// uniform contact pressure on every contact interface; metrics `max_rel_stress_error`,
-    /// `max_rel_pressure_error` and `net_contact_force`).
+    /// `max_rel_pressure_error` and `net_contact_force`) or `"hertz"` (a sphere pressed on a
+    /// flat along the z axis (the axis x = y = 0), against Hertz's contact radius and peak
+    /// pressure for the contact force of the run; metrics `rel_error_contact_radius`,
+    /// `rel_error_peak_pressure`, `rel_error_hertz` (the larger), `contact_radius`,
+    /// `peak_pressure`, `hertz_contact_radius`, `hertz_peak_pressure`, `contact_force`,
+    /// `max_pressure`, `hertz_contact_nodes`; see `crate::verify`, "Hertz").
     pub kind: String,
     /// lame_sphere: inner and outer radius and inner pressure.
     pub inner_radius: Option<f64>,
@@ -476,6 +511,17 @@ pub struct VerificationSpec {
     pub gradient: Option<[[f64; 3]; 3]>,
     /// contact_patch: the exact Cauchy stress (row-major 3x3).
     pub stress: Option<[[f64; 3]; 3]>,
+    /// hertz: the radius R of the sphere pressed on the flat (for two spheres, the effective
+    /// radius 1/R = 1/R1 + 1/R2), > 0. Required.
+    pub radius: Option<f64>,
+    /// hertz: the name of the contact interface between the two bodies (one pass). Its
+    /// secondary side's nodal pressures are measured; each side's body gives E and nu to
+    /// 1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2. Required.
+    pub interface: Option<String>,
+    /// hertz: the share of the whole contact that the mesh models, in (0, 1]: 0.25 for a
+    /// quarter model with symmetry planes x = 0 and y = 0, 1 for the whole. The contact force
+    /// of the run is divided by it. Required.
+    pub model_fraction: Option<f64>,
 }
 
 impl CaseFile {

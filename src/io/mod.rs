@@ -1,6 +1,8 @@
-//! Input and output: Gmsh import, VTU/PVTU/PVD output, CSV history, summary, atomic writes.
+//! Input and output: Gmsh import, VTU/PVTU/PVD output, CSV history, summary, atomic writes,
+//! PETSc's performance logs.
 
 pub mod case_file;
 pub mod gmsh;
 pub mod output;
+pub mod petsc_log;
 pub mod plot;

@@ -172,6 +172,13 @@ fn write_loglog(
     Ok(warnings)
 }
 
+/// Prints the warnings of a plot writer on stderr, one line each.
+pub fn print_warnings(warnings: Vec<String>) {
+    for w in warnings {
+        eprintln!("mortar: warning: {w}");
+    }
+}
+
 /// The warning for a plot at `stem` when no font file is found (none when one is).
 fn font_warnings(stem: &Path) -> Vec<String> {
     if font().is_some() {

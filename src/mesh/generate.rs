@@ -41,6 +41,59 @@
 //! `r(w) = r_in + w (r_out - r_in)`; the other patches are its cyclic permutations, so all three
 //! maps are orientation preserving. Coincident nodes of the patches are merged.
 //!
+//! # Graded boxes
+//!
+//! [`graded_box_mesh`] puts the cell corners along each axis at
+//! `x = lo + (hi - lo) expm1(beta u) / expm1(beta)` ([`exp_grading`]), so the cells grow in a
+//! constant ratio from `lo` to `hi` and the last is `grading` times the first
+//! (`beta = ln(grading) n / (n - 1)` for `n` cells; OpenFOAM's expansion ratio);
+//! [`zoned_box_mesh`] keeps the cells uniform over a zone at the fine end first
+//! ([`ZoneGrading`]). Inside a cell the map is linear: the elements are straight-sided boxes,
+//! with the mid-nodes of quadratic elements halfway along their edges.
+//!
+//! # Hemisphere
+//!
+//! [`hemisphere_quarter`] is the quarter `x, y >= 0` of a solid hemisphere of radius R, meant to
+//! be pressed on something at its pole: a ball octant made of four mapped blocks, built in a
+//! frame `(x', y', z')` with the centre at the origin and the pole on `+z'`:
+//!
+//! - the **core**: the cube `[0, c]^3`, `c = HEMISPHERE_CORE R`, mapped by
+//!   `u -> c (tan(pi u0 / 4), tan(pi u1 / 4), tan(pi u2 / 4))`;
+//! - three **shell patches**, one per cube face away from the centre (`x' = c`, `y' = c`,
+//!   `z' = c`), as in the sphere octant: on patch `x'` the surface parameters `(s, t)` give the
+//!   direction `d = (1, tan(pi s / 4), tan(pi t / 4))` (cyclic permutations for the other two),
+//!   and the point at depth parameter `w` is `c d + omega(w) (R d / |d| - c d)`, from the cube
+//!   face (where the core's lattice is, node for node) along the ray to the sphere. The layers
+//!   are graded toward the sphere: the layer boundaries are at
+//!   `omega(k / n_rad) = 1 - exp_grading(1 - k / n_rad, beta)` with the innermost layer
+//!   `radial_grading` times as thick as the outermost, and `omega` is linear within a layer.
+//!
+//! The blocks meet node for node (the core's faces are the patches' inner faces, and
+//! neighbouring patches share the rays of their common edge), and coincident nodes are merged.
+//! Then every point goes through one **polar grading** map toward the pole, in spherical
+//! coordinates about the centre (`theta` from the pole):
+//! `theta -> theta + w(r) (G(theta) - theta)`, `r` and the azimuth kept, with the weight
+//! `w(r) = (r / R)^2` (full at the surface, none at the centre) and `G` the [`ZoneGrading`] of
+//! `[0, pi/2]` (uniform spacing over the arc `pole_zone` from the pole, then growing to
+//! `pole_grading` times that at the equator) sampled at the `2 n_circ + 1` equal-angle polar
+//! angles of the cell corners along a meridian and linear in between, so that within a cell
+//! the map is a rotation by a linear function of the angle and the mid-nodes of quadratic
+//! elements stay halfway (in angle) between their corners even where the cells grow fast. In
+//! the `(r, theta)` plane its Jacobian determinant is `1 - w + w G'(theta) > 0`, so it is
+//! orientation preserving; it keeps the sphere, the flat
+//! face `theta = pi/2`, the symmetry planes (azimuth 0 and pi/2) and the axis, so sets and the
+//! conformity of the blocks survive it. Grading the cube-sphere's surface parameters instead
+//! (one monotone map on every parameter, which also keeps the patches conforming) would refine
+//! toward the two symmetry planes all along them, not toward the pole alone; the polar map
+//! refines a disc around the pole and coarsens toward the equator, with elements near the pole
+//! about square (near the pole it scales the tangent plane uniformly).
+//!
+//! Last, `(x', y', z') -> (y', x', R - z')` (a proper rotation: two reflections) puts the pole
+//! at the origin, the centre at `(0, 0, R)` and the flat face at `z = R`. Sets: `"sphere"`,
+//! `"flat"`, `"symx"` (`x = 0`), `"symy"` (`y = 0`), from the parameter sides of the blocks. Every
+//! map is orientation preserving; the elements with the smallest scaled Jacobian (about 0.2
+//! with strong gradings) are in the shell where the three patches meet, as in any cube-sphere.
+//!
 //! # Validation
 //!
 //! [`Mesh::check`] verifies indices and element node counts and that
@@ -240,14 +293,213 @@ pub fn box_mesh(
     hi: [f64; 3],
     body: &str,
 ) -> Mesh {
+    graded_box_mesh(kind, div, lo, hi, [1.0; 3], body)
+}
+
+/// `expm1(beta u) / expm1(beta)`: a map of `[0, 1]` onto itself whose slope grows by the factor
+/// `e^beta` from `u = 0` to `u = 1` (shrinks for `beta < 0`); the identity for `beta = 0`, and
+/// exactly 0 and 1 at the ends.
+pub fn exp_grading(u: f64, beta: f64) -> f64 {
+    if beta == 0.0 {
+        u
+    } else if u <= 0.0 {
+        0.0
+    } else if u >= 1.0 {
+        1.0
+    } else {
+        (beta * u).exp_m1() / beta.exp_m1()
+    }
+}
+
+/// A smooth, increasing map of `[0, 1]` onto itself for graded meshes: the spacing of equal
+/// parameter steps is uniform over a fine **zone** at the start (the first `zone` of the
+/// image), then grows exponentially to `ratio` times the zone's at `u = 1`. With
+/// `h(u) = 1` for `u <= u_z` and `exp(beta (u - u_z))` beyond, `beta = ln(ratio) / (1 - u_z)`,
+/// the map is `H(u) / H(1)` with `H` the integral of `h` (continuous slope); `u_z` is solved
+/// (bisection) so that `H(u_z) / H(1) = zone`. Without a zone it is [`exp_grading`] with
+/// `beta = ln(ratio)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ZoneGrading {
+    u_zone: f64,
+    beta: f64,
+    total: f64,
+}
+
+impl ZoneGrading {
+    /// `ratio >= 1` (1: the identity), `zone` in `[0, 1)`.
+    ///
+    /// # Panics
+    /// If `ratio < 1` or `zone` is outside `[0, 1)` (validate user input first).
+    pub fn new(ratio: f64, zone: f64) -> ZoneGrading {
+        assert!(
+            ratio >= 1.0 && ratio.is_finite() && (0.0..1.0).contains(&zone),
+            "ZoneGrading: ratio {ratio} must be >= 1 and zone {zone} in [0, 1)"
+        );
+        let make = |u_zone: f64| {
+            let beta = ratio.ln() / (1.0 - u_zone);
+            let total = if beta == 0.0 {
+                1.0
+            } else {
+                u_zone + (ratio - 1.0) / beta
+            };
+            ZoneGrading {
+                u_zone,
+                beta,
+                total,
+            }
+        };
+        if ratio == 1.0 || zone == 0.0 {
+            return make(0.0);
+        }
+        // The zone's share of the image, u_z / H(1), grows from 0 to 1 with u_z.
+        let (mut lo, mut hi) = (0.0f64, 1.0f64);
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            let g = make(mid);
+            if mid / g.total < zone {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        make(0.5 * (lo + hi))
+    }
+
+    /// The map at `u` (exactly 0 and 1 at the ends).
+    pub fn map(&self, u: f64) -> f64 {
+        if u <= 0.0 {
+            return 0.0;
+        }
+        if u >= 1.0 {
+            return 1.0;
+        }
+        if self.beta == 0.0 {
+            return u;
+        }
+        let h = if u <= self.u_zone {
+            u
+        } else {
+            self.u_zone + (self.beta * (u - self.u_zone)).exp_m1() / self.beta
+        };
+        h / self.total
+    }
+}
+
+/// The exponent `beta` of [`exp_grading`] that makes `n` equal lattice cells map to cells
+/// growing geometrically, the last `ratio` times as long as the first (0 for `n = 1` or
+/// `ratio = 1`).
+fn cell_ratio_exponent(ratio: f64, n: usize) -> f64 {
+    if n < 2 || ratio == 1.0 {
+        0.0
+    } else {
+        ratio.ln() * n as f64 / (n - 1) as f64
+    }
+}
+
+/// A box `[lo, hi]` whose cells grow geometrically along each axis: along axis `d` the last
+/// cell (at `hi[d]`) is `grading[d]` times as long as the first (at `lo[d]`), consecutive cells
+/// in the constant ratio `grading[d]^(1 / (div[d] - 1))` (OpenFOAM's expansion ratio; 1 is
+/// uniform, below 1 refines toward `hi`). The map per axis is
+/// `x = lo + (hi - lo) expm1(beta u) / expm1(beta)` with `beta = ln(grading) n / (n - 1)`, smooth,
+/// so the mid-nodes of quadratic elements follow it. Sets as [`box_mesh`].
+///
+/// # Panics
+/// If a division is zero or a grading is not finite and positive (validate user input first).
+pub fn graded_box_mesh(
+    kind: ElementType,
+    div: [usize; 3],
+    lo: [f64; 3],
+    hi: [f64; 3],
+    grading: [f64; 3],
+    body: &str,
+) -> Mesh {
+    zoned_box_mesh(kind, div, lo, hi, grading, [0.0; 3], body)
+}
+
+/// [`graded_box_mesh`] with a uniformly fine zone at the fine end of each axis (`lo` for a
+/// grading above 1, `hi` below 1): along axis `d` the first `zone[d]` of the length (measured
+/// from the fine end) has uniform cells, then the cells grow ([`ZoneGrading`]); the grading is
+/// then the spacing at the coarse end over the zone's (the ratio of the continuous profile,
+/// near that of the end cells). A zero zone is [`graded_box_mesh`]'s exact cell ratio. The cell
+/// corners follow the map and every cell is straight (mid-nodes halfway along the edges).
+///
+/// # Panics
+/// If a division is zero, a grading is not finite and positive, or a zone is not in
+/// `[0, hi - lo)` (validate user input first).
+pub fn zoned_box_mesh(
+    kind: ElementType,
+    div: [usize; 3],
+    lo: [f64; 3],
+    hi: [f64; 3],
+    grading: [f64; 3],
+    zone: [f64; 3],
+    body: &str,
+) -> Mesh {
+    assert!(
+        grading.iter().all(|g| g.is_finite() && *g > 0.0),
+        "graded box: grading must be finite and positive, got {grading:?}"
+    );
+    // Per axis: (map, flipped) with the map refining toward u = 0.
+    let axes: [(ZoneGrading, bool); 3] = std::array::from_fn(|d| {
+        let (ratio, flip) = if grading[d] >= 1.0 {
+            (grading[d], false)
+        } else {
+            (1.0 / grading[d], true)
+        };
+        let share = zone[d] / (hi[d] - lo[d]);
+        assert!(
+            (0.0..1.0).contains(&share),
+            "graded box: zone {} outside the axis length",
+            zone[d]
+        );
+        let g = if share == 0.0 {
+            // The exact cell ratio: beta from the number of cells.
+            let beta = cell_ratio_exponent(ratio, div[d]);
+            ZoneGrading {
+                u_zone: 0.0,
+                beta,
+                total: if beta == 0.0 {
+                    1.0
+                } else {
+                    beta.exp_m1() / beta
+                },
+            }
+        } else {
+            ZoneGrading::new(ratio, share)
+        };
+        (g, flip)
+    });
+    // The cell corners along each axis; inside a cell the map is linear, so the elements are
+    // straight-sided and the mid-nodes of quadratic elements sit at the middle of their edges
+    // (the smooth map would push them toward the coarse end, by a lot in a steeply growing
+    // cell).
+    let corners: [Vec<f64>; 3] = std::array::from_fn(|d| {
+        let (g, flip) = axes[d];
+        (0..=div[d])
+            .map(|i| {
+                let u = i as f64 / div[d] as f64;
+                if flip {
+                    1.0 - g.map(1.0 - u)
+                } else {
+                    g.map(u)
+                }
+            })
+            .collect()
+    });
+    let along = |d: usize, u: f64| -> f64 {
+        let c = &corners[d];
+        let t = u * div[d] as f64;
+        let i = (t.floor() as usize).min(div[d] - 1);
+        c[i] + (t - i as f64) * (c[i + 1] - c[i])
+    };
     mapped_block(
         kind,
         div,
         |u| {
             [
-                lo[0] + u[0] * (hi[0] - lo[0]),
-                lo[1] + u[1] * (hi[1] - lo[1]),
-                lo[2] + u[2] * (hi[2] - lo[2]),
+                lo[0] + along(0, u[0]) * (hi[0] - lo[0]),
+                lo[1] + along(1, u[1]) * (hi[1] - lo[1]),
+                lo[2] + along(2, u[2]) * (hi[2] - lo[2]),
             ]
         },
         body,
@@ -346,6 +598,180 @@ pub fn thick_sphere_octant(
     }
     out.merge_coincident_nodes(1e-6);
     out
+}
+
+/// Half-size of the core cube of [`hemisphere_quarter`], as a fraction of the radius.
+pub const HEMISPHERE_CORE: f64 = 0.5;
+
+/// A quarter of a solid hemisphere of radius `radius` (a ball octant), graded toward its pole
+/// for contact: the pole at the origin, the centre at `(0, 0, radius)`, the flat (equatorial)
+/// face at `z = radius`, and `x, y >= 0` (see the module documentation, "Hemisphere").
+///
+/// `n_circ` cells along each side of each of the three surface patches (and of the core cube),
+/// `n_rad` through the shell between the core and the sphere; `pole_grading` (>= 1) is the ratio
+/// of the polar-angle spacing at the equator to that at the pole on the spherical surface, and
+/// `radial_grading` the ratio of the innermost shell layer's thickness to the outermost's (1:
+/// uniform; above 1 the layers get thinner toward the surface).
+///
+/// Face and node sets: `"sphere"` (the spherical surface), `"flat"` (`z = radius`), `"symx"`
+/// (`x = 0`), `"symy"` (`y = 0`).
+///
+/// # Panics
+/// If `n_circ` or `n_rad` is zero, or a grading is not finite and positive.
+#[allow(clippy::too_many_arguments)]
+pub fn hemisphere_quarter(
+    kind: ElementType,
+    n_circ: usize,
+    n_rad: usize,
+    radius: f64,
+    pole_grading: f64,
+    pole_zone: f64,
+    radial_grading: f64,
+    body: &str,
+) -> Mesh {
+    assert!(
+        pole_grading.is_finite()
+            && pole_grading > 0.0
+            && radial_grading.is_finite()
+            && radial_grading > 0.0,
+        "hemisphere_quarter: gradings must be finite and positive"
+    );
+    let r_big = radius;
+    let core = HEMISPHERE_CORE * r_big;
+    // Layers: the outermost is 1 / radial_grading of the innermost.
+    let beta_rad = cell_ratio_exponent(radial_grading, n_rad);
+    let half_pi = std::f64::consts::FRAC_PI_2;
+    let smooth = ZoneGrading::new(pole_grading, pole_zone / (half_pi * r_big));
+    // G at the polar angles of the cells' corners along a meridian (2 n_circ equal-angle cells
+    // before grading), linear in between.
+    let cells = 2 * n_circ;
+    let polar = PolarGrading {
+        identity: smooth.beta == 0.0,
+        knots: (0..=cells)
+            .map(|k| half_pi * smooth.map(k as f64 / cells as f64))
+            .collect(),
+    };
+    // Everything is built in the frame (x', y', z') with the pole along +z' from the centre at
+    // the origin, then turned by (x', y', z') -> (y', x', R - z') (two reflections: a proper
+    // rotation plus a shift).
+    let place = move |p: [f64; 3]| -> [f64; 3] {
+        let q = polar_grading(p, r_big, &polar);
+        [q[1], q[0], r_big - q[2]]
+    };
+    let place_core = place.clone();
+    let layers: Vec<f64> = (0..=n_rad)
+        .map(|k| 1.0 - exp_grading(1.0 - k as f64 / n_rad as f64, beta_rad))
+        .collect();
+    let shell = move |w: f64, d: [f64; 3]| -> [f64; 3] {
+        // d has its largest component 1: core * d is on a face of the core cube, and the sphere
+        // point on the same ray is R d / |d|.
+        let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        // Thin layers at the surface: the layers' boundaries at 1 - grading(1 - k / n_rad),
+        // linear within a layer (mid-nodes halfway through their layer).
+        let t = (w * n_rad as f64).clamp(0.0, n_rad as f64);
+        let k = (t.floor() as usize).min(n_rad - 1);
+        let s = layers[k] + (t - k as f64) * (layers[k + 1] - layers[k]);
+        let p: [f64; 3] = std::array::from_fn(|i| {
+            let inner = core * d[i];
+            let outer = r_big * d[i] / n;
+            inner + s * (outer - inner)
+        });
+        place(p)
+    };
+    // (map, set names of the parameter sides xmin, ymin, zmin, zmax; "" for internal sides).
+    // Final names: the plane x' = 0 becomes y = 0 ("symy") and y' = 0 becomes x = 0 ("symx");
+    // z' = 0 is the flat face.
+    let blocks: [(PatchMap, [&str; 4], [usize; 3]); 4] = [
+        (
+            Box::new(move |u: [f64; 3]| {
+                place_core([
+                    core * tan_quarter(u[0]),
+                    core * tan_quarter(u[1]),
+                    core * tan_quarter(u[2]),
+                ])
+            }),
+            ["symy", "symx", "flat", ""],
+            [n_circ, n_circ, n_circ],
+        ),
+        (
+            Box::new({
+                let shell = shell.clone();
+                move |u: [f64; 3]| shell(u[2], [1.0, tan_quarter(u[0]), tan_quarter(u[1])])
+            }),
+            ["symx", "flat", "", "sphere"],
+            [n_circ, n_circ, n_rad],
+        ),
+        (
+            Box::new({
+                let shell = shell.clone();
+                move |u: [f64; 3]| shell(u[2], [tan_quarter(u[1]), 1.0, tan_quarter(u[0])])
+            }),
+            ["flat", "symy", "", "sphere"],
+            [n_circ, n_circ, n_rad],
+        ),
+        (
+            Box::new(move |u: [f64; 3]| shell(u[2], [tan_quarter(u[0]), tan_quarter(u[1]), 1.0])),
+            ["symy", "symx", "", "sphere"],
+            [n_circ, n_circ, n_rad],
+        ),
+    ];
+    let mut out = Mesh::new();
+    for (map, names, div) in blocks {
+        let mut part = mapped_block(kind, div, map, body);
+        let rename: Vec<(&str, &str)> = ["xmin", "ymin", "zmin", "zmax"]
+            .into_iter()
+            .zip(names)
+            .filter(|(_, to)| !to.is_empty())
+            .collect();
+        part.face_sets = rename
+            .iter()
+            .filter_map(|(from, to)| part.face_sets.remove(*from).map(|v| (to.to_string(), v)))
+            .collect();
+        part.node_sets = rename
+            .iter()
+            .filter_map(|(from, to)| part.node_sets.remove(*from).map(|v| (to.to_string(), v)))
+            .collect();
+        out.merge(part);
+    }
+    out.merge_coincident_nodes(1e-6);
+    out
+}
+
+/// The polar grading of [`hemisphere_quarter`]: `G` at the equal-angle knots
+/// `theta_k = k pi / (2 cells)`, `k = 0..=cells`.
+#[derive(Clone)]
+struct PolarGrading {
+    identity: bool,
+    knots: Vec<f64>,
+}
+
+impl PolarGrading {
+    /// `G(theta)`, linear between the knots.
+    fn at(&self, theta: f64) -> f64 {
+        let cells = self.knots.len() - 1;
+        let t = (theta / std::f64::consts::FRAC_PI_2 * cells as f64).clamp(0.0, cells as f64);
+        let k = (t.floor() as usize).min(cells - 1);
+        self.knots[k] + (t - k as f64) * (self.knots[k + 1] - self.knots[k])
+    }
+}
+
+/// The grading of [`hemisphere_quarter`] toward its pole, in the frame with the pole along
+/// `+z` from the centre at the origin: in spherical coordinates `(r, theta, phi)` about the
+/// centre (`theta` from the pole), `theta -> theta + w (G(theta) - theta)` with `w = (r / R)^2`;
+/// `r` and `phi` are kept. Points on the axis, on the plane `z = 0` or at the centre do not
+/// move.
+fn polar_grading(p: [f64; 3], radius: f64, polar: &PolarGrading) -> [f64; 3] {
+    let rho = (p[0] * p[0] + p[1] * p[1]).sqrt();
+    if polar.identity || rho == 0.0 || p[2] == 0.0 {
+        return p;
+    }
+    let r = (rho * rho + p[2] * p[2]).sqrt();
+    let theta = rho.atan2(p[2]);
+    let g = polar.at(theta);
+    let w = (r / radius).powi(2).min(1.0);
+    let t = theta + w * (g - theta);
+    let (sin, cos) = t.sin_cos();
+    [p[0] * r * sin / rho, p[1] * r * sin / rho, r * cos]
 }
 
 /// Sorts and removes duplicates.
@@ -651,7 +1077,7 @@ mod tests {
     const ALL: [ElementType; 5] = ElementType::ALL;
 
     /// Volume of the mesh by quadrature of det J (degree 6).
-    fn volume(m: &Mesh) -> f64 {
+    pub(super) fn volume(m: &Mesh) -> f64 {
         let mut v = 0.0;
         for e in 0..m.num_elements() {
             let kind = m.types[e];
@@ -807,6 +1233,273 @@ mod tests {
                 .map(|s| m.face_sets[*s].len())
                 .sum();
             assert_eq!(boundary, named, "{kind:?}");
+        }
+    }
+
+    #[test]
+    fn graded_box_cells_grow_geometrically() {
+        for kind in [ElementType::Hex8, ElementType::Hex27, ElementType::Tet10] {
+            let (lo, hi) = ([0.0, -1.0, -2.0], [1.0, 1.0, 0.0]);
+            let m = graded_box_mesh(kind, [4, 3, 5], lo, hi, [8.0, 1.0, 0.1], "b");
+            m.check().unwrap();
+            assert!((volume(&m) - 4.0).abs() < 1e-12, "{kind:?}");
+            // The corner (vertex) coordinates along each axis.
+            let p = kind.order();
+            let mut xs: Vec<f64> = m
+                .node_set("ymin")
+                .unwrap()
+                .iter()
+                .map(|&n| m.coords[n][0])
+                .collect();
+            xs.sort_by(f64::total_cmp);
+            xs.dedup();
+            assert_eq!(xs.len(), 4 * p + 1);
+            let cells: Vec<f64> = (0..4).map(|i| xs[p * (i + 1)] - xs[p * i]).collect();
+            let q = 8f64.powf(1.0 / 3.0);
+            for w in cells.windows(2) {
+                assert!((w[1] / w[0] - q).abs() < 1e-12, "{cells:?}");
+            }
+            assert!((cells[3] / cells[0] - 8.0).abs() < 1e-11);
+            let mut zs: Vec<f64> = m
+                .node_set("xmin")
+                .unwrap()
+                .iter()
+                .map(|&n| m.coords[n][2])
+                .collect();
+            zs.sort_by(f64::total_cmp);
+            zs.dedup();
+            let first = zs[p] - zs[0];
+            let last = zs[5 * p] - zs[5 * p - p];
+            assert!((last / first - 0.1).abs() < 1e-12);
+            assert_eq!(zs[0], -2.0);
+            assert_eq!(zs[5 * p], 0.0);
+            // Uniform along y.
+            let mut ys: Vec<f64> = m
+                .node_set("xmin")
+                .unwrap()
+                .iter()
+                .map(|&n| m.coords[n][1])
+                .collect();
+            ys.sort_by(f64::total_cmp);
+            ys.dedup();
+            for (i, y) in ys.iter().enumerate() {
+                assert!((y - (-1.0 + 2.0 * i as f64 / (3 * p) as f64)).abs() < 1e-14);
+            }
+        }
+        // Grading 1 is the plain box, bit for bit.
+        let a = box_mesh(
+            ElementType::Hex20,
+            [2, 3, 4],
+            [0.0; 3],
+            [1.0, 2.0, 3.0],
+            "b",
+        );
+        let b = graded_box_mesh(
+            ElementType::Hex20,
+            [2, 3, 4],
+            [0.0; 3],
+            [1.0, 2.0, 3.0],
+            [1.0; 3],
+            "b",
+        );
+        assert_eq!(a.coords, b.coords);
+    }
+
+    #[test]
+    fn zone_grading_is_uniform_in_its_zone_then_grows_to_its_ratio() {
+        for (ratio, zone) in [(1.0, 0.0), (1.0, 0.5), (20.0, 0.0), (20.0, 0.3), (5.0, 0.8)] {
+            let g = ZoneGrading::new(ratio, zone);
+            assert_eq!(g.map(0.0), 0.0);
+            assert_eq!(g.map(1.0), 1.0);
+            let n = 2000;
+            let x: Vec<f64> = (0..=n).map(|i| g.map(i as f64 / n as f64)).collect();
+            let dx: Vec<f64> = x.windows(2).map(|w| w[1] - w[0]).collect();
+            assert!(
+                dx.iter().all(|&d| d > 0.0),
+                "{ratio} {zone}: not increasing"
+            );
+            // Slopes: the end over the start is the ratio.
+            let end = dx[n - 1] / dx[0];
+            assert!((end - ratio).abs() < 0.01 * ratio, "{ratio} {zone}: {end}");
+            // Uniform over the first `zone` of the image, growing after it.
+            let in_zone: Vec<f64> = dx
+                .iter()
+                .zip(&x)
+                .filter(|(_, &xi)| xi < zone - 1e-3)
+                .map(|(d, _)| *d)
+                .collect();
+            if let (Some(lo), Some(hi)) = (
+                in_zone.iter().cloned().reduce(f64::min),
+                in_zone.iter().cloned().reduce(f64::max),
+            ) {
+                assert!((hi - lo).abs() < 1e-9 * hi, "{ratio} {zone}");
+                if ratio > 1.0 {
+                    let after = dx[in_zone.len() + 10];
+                    assert!(after > hi * (1.0 + 1e-6), "{ratio} {zone}");
+                }
+            }
+        }
+        // Without a zone, the exponential map.
+        let g = ZoneGrading::new(8.0, 0.0);
+        for u in [0.1, 0.5, 0.9] {
+            assert!((g.map(u) - exp_grading(u, 8f64.ln())).abs() < 1e-14);
+        }
+    }
+
+    #[test]
+    fn zoned_box_keeps_uniform_cells_near_its_fine_end() {
+        let m = zoned_box_mesh(
+            ElementType::Hex8,
+            [10, 2, 10],
+            [0.0, 0.0, -1.0],
+            [1.0, 1.0, 0.0],
+            [10.0, 1.0, 0.1],
+            [0.3, 0.0, 0.3],
+            "b",
+        );
+        m.check().unwrap();
+        assert!((volume(&m) - 1.0).abs() < 1e-12);
+        let coords = |set: &str, d: usize| {
+            let mut v: Vec<f64> = m
+                .node_set(set)
+                .unwrap()
+                .iter()
+                .map(|&n| m.coords[n][d])
+                .collect();
+            v.sort_by(f64::total_cmp);
+            v.dedup();
+            v
+        };
+        // x from 0: equal cells up to 0.3, growing after.
+        let xs = coords("ymin", 0);
+        let cells: Vec<f64> = xs.windows(2).map(|w| w[1] - w[0]).collect();
+        let k = xs.iter().filter(|&&x| x <= 0.3 + 1e-12).count() - 1;
+        assert!(k >= 2);
+        for c in &cells[..k - 1] {
+            assert!((c - cells[0]).abs() < 1e-12, "{cells:?}");
+        }
+        assert!(
+            cells[k + 1] > 1.05 * cells[0] && cells[9] > 3.0 * cells[0],
+            "{cells:?}"
+        );
+        // z from the top (grading below 1): the same, mirrored.
+        let zs = coords("xmin", 2);
+        let cz: Vec<f64> = zs.windows(2).map(|w| w[1] - w[0]).rev().collect();
+        for (a, b) in cz.iter().zip(&cells) {
+            assert!((a - b).abs() < 1e-12, "{cz:?} {cells:?}");
+        }
+    }
+
+    #[test]
+    fn hemisphere_quarter_of_every_hexahedron() {
+        let radius = 2.0f64;
+        let exact = std::f64::consts::PI / 6.0 * radius.powi(3);
+        for kind in [ElementType::Hex8, ElementType::Hex20, ElementType::Hex27] {
+            // (n_circ, n_rad, pole grading, radial grading, volume tolerance for Hex8, Hex20,
+            // Hex27): the volume converges at O(h^2) for Hex8 (flat faces under the sphere) and
+            // at O(h^4) for the quadratic elements, whose mid-nodes are on the sphere.
+            let levels = [
+                (3, 2, 1.0, 1.0, [0.035, 3e-4, 3e-5]),
+                (4, 5, 20.0, 8.0, [0.05, 8e-4, 6e-4]),
+                (8, 8, 20.0, 8.0, [0.012, 5e-5, 4e-5]),
+                (6, 8, 40.0, 15.0, [0.03, 5e-4, 5e-4]),
+            ];
+            for (nc, nr, pole, rad, tols) in levels {
+                let m = hemisphere_quarter(kind, nc, nr, radius, pole, 0.0, rad, "ball");
+                let what = format!("{kind:?} n_circ {nc} n_rad {nr} grading {pole} {rad}");
+                m.check().unwrap_or_else(|e| panic!("{what}: {e}"));
+                assert_eq!(m.num_elements(), nc * nc * nc + 3 * nc * nc * nr);
+                let rel = (volume(&m) - exact).abs() / exact;
+                let tol = match kind {
+                    ElementType::Hex8 => tols[0],
+                    ElementType::Hex20 => tols[1],
+                    _ => tols[2],
+                };
+                assert!(rel < tol, "{what}: volume error {rel}");
+                let centre = [0.0, 0.0, radius];
+                let dist = |n: usize| {
+                    let x = m.coords[n];
+                    ((x[0] - centre[0]).powi(2)
+                        + (x[1] - centre[1]).powi(2)
+                        + (x[2] - centre[2]).powi(2))
+                    .sqrt()
+                };
+                // Every node inside the quarter hemisphere, the pole a node.
+                for (n, x) in m.coords.iter().enumerate() {
+                    assert!(
+                        x[0] >= 0.0 && x[1] >= 0.0 && x[2] >= 0.0 && x[2] <= radius,
+                        "{what}"
+                    );
+                    assert!(dist(n) <= radius * (1.0 + 1e-14), "{what}");
+                }
+                assert!(m.coords.iter().any(|x| x.iter().all(|&c| c.abs() < 1e-15)));
+                let fpc = 1;
+                // The spherical surface: 3 nc^2 faces, every node on it at distance R, and every
+                // node at distance R in it.
+                assert_eq!(m.face_set("sphere").unwrap().len(), 3 * nc * nc * fpc);
+                for n in m.nodes_of_set("sphere").unwrap() {
+                    assert!((dist(n) - radius).abs() < 1e-13, "{what}");
+                }
+                let on_sphere = (0..m.num_nodes())
+                    .filter(|&n| (dist(n) - radius).abs() < 1e-9)
+                    .count();
+                assert_eq!(m.node_set("sphere").unwrap().len(), on_sphere, "{what}");
+                // The planes: flat z = R, symx x = 0, symy y = 0, each a face of the core and
+                // the sides of two patches.
+                let planes = [("flat", 2, radius), ("symx", 0, 0.0), ("symy", 1, 0.0)];
+                for (name, d, value) in planes {
+                    let faces = m.face_set(name).unwrap();
+                    assert_eq!(faces.len(), nc * nc + 2 * nc * nr, "{what} {name}");
+                    for n in m.nodes_of_set(name).unwrap() {
+                        assert_eq!(m.coords[n][d], value, "{what} {name}");
+                    }
+                    let all = (0..m.num_nodes())
+                        .filter(|&n| m.coords[n][d] == value)
+                        .count();
+                    assert_eq!(m.node_set(name).unwrap().len(), all, "{what} {name}");
+                }
+                // No internal seams: the boundary is exactly the four named face sets.
+                let (xadj, _) = crate::mesh::partition::dual_graph(&m);
+                let boundary = m.num_elements() * 6 - xadj[m.num_elements()];
+                let named: usize = ["sphere", "flat", "symx", "symy"]
+                    .iter()
+                    .map(|s| m.face_sets[*s].len())
+                    .sum();
+                assert_eq!(boundary, named, "{what}");
+            }
+        }
+    }
+
+    /// With a pole zone, the surface nodes on a meridian are evenly spaced in polar angle
+    /// over the zone, and the spacing grows beyond it.
+    #[test]
+    fn hemisphere_pole_zone_is_evenly_spaced() {
+        let radius = 1.0;
+        for kind in [ElementType::Hex8, ElementType::Hex27] {
+            let m = hemisphere_quarter(kind, 8, 4, radius, 20.0, 0.3, 8.0, "ball");
+            m.check().unwrap();
+            // Polar angles of the sphere's nodes in the plane y = 0.
+            let mut theta: Vec<f64> = m
+                .nodes_of_set("sphere")
+                .unwrap()
+                .into_iter()
+                .filter(|&n| m.coords[n][1] == 0.0)
+                .map(|n| m.coords[n][0].atan2(radius - m.coords[n][2]))
+                .collect();
+            theta.sort_by(f64::total_cmp);
+            let steps: Vec<f64> = theta.windows(2).map(|w| w[1] - w[0]).collect();
+            // The nodes of the cells wholly inside the zone (a cell may straddle its end).
+            let cell = kind.order() as f64 * steps[0];
+            let in_zone = theta.iter().filter(|&&t| t <= 0.3 - cell + 1e-9).count() - 1;
+            assert!(in_zone >= 6 * kind.order(), "{kind:?}: {theta:?}");
+            for s in &steps[..in_zone] {
+                assert!((s - steps[0]).abs() < 1e-9, "{kind:?}: {steps:?}");
+            }
+            assert!(
+                steps[steps.len() - 1] > 10.0 * steps[0],
+                "{kind:?}: {steps:?}"
+            );
+            assert!((theta[theta.len() - 1] - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
         }
     }
 

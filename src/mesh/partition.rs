@@ -87,6 +87,11 @@ pub fn partition_elements(mesh: &Mesh, nparts: usize) -> Result<Vec<usize>> {
         .map_err(|_| too_big("dual graph"))?;
     let np = Idx::try_from(nparts).map_err(|_| too_big("part count"))?;
     let mut part: Vec<Idx> = vec![0; ne];
+    // METIS keeps global state (its random generator): one call at a time in a process.
+    static METIS: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let _one_at_a_time = METIS
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner());
     Graph::new(1, np, &xadj, &adjncy)
         .map_err(|e| Error::Mesh(format!("METIS rejected the dual graph: {e:?}")))?
         .set_option(metis::option::Seed(METIS_SEED))
@@ -96,14 +101,31 @@ pub fn partition_elements(mesh: &Mesh, nparts: usize) -> Result<Vec<usize>> {
                 "METIS k-way partitioning of {ne} elements into {nparts} parts failed: {e:?}"
             ))
         })?;
-    part.into_iter()
+    let part: Vec<usize> = part
+        .into_iter()
         .map(|p| {
             usize::try_from(p)
                 .ok()
                 .filter(|&p| p < nparts)
                 .ok_or_else(|| Error::Mesh(format!("METIS returned part {p} of {nparts}")))
         })
-        .collect()
+        .collect::<Result<_>>()?;
+    Ok(canonical_labels(part, nparts))
+}
+
+/// The same parts, numbered in the order in which the elements first meet them (the part of
+/// element 0 is part 0), so that a partition METIS returns with its labels permuted (seen with
+/// the same seed) gives the same ranks.
+fn canonical_labels(part: Vec<usize>, nparts: usize) -> Vec<usize> {
+    let mut label = vec![usize::MAX; nparts];
+    let mut next = 0;
+    for &p in &part {
+        if label[p] == usize::MAX {
+            label[p] = next;
+            next += 1;
+        }
+    }
+    part.into_iter().map(|p| label[p]).collect()
 }
 
 /// Owner part of every node: the smallest part among the elements touching it (part 0 for nodes

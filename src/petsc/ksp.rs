@@ -65,6 +65,15 @@ impl Drop for Ksp {
     }
 }
 
+/// The options [`set_linear_solver_defaults`] may write into the database (restored with a
+/// study variant's own options: `options::Override`).
+pub(crate) const DEFAULTED_OPTIONS: [&str; 4] = [
+    "-pc_type",
+    "-pc_factor_mat_solver_type",
+    "-mat_mumps_icntl_24",
+    "-ksp_type",
+];
+
 /// The default linear solver, as option defaults so that any user choice replaces it whole:
 /// with neither `-ksp_type` nor `-pc_type` given, a direct solve (`preonly`, `lu`, MUMPS, with
 /// null-pivot detection); with

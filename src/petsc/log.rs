@@ -129,7 +129,8 @@ impl Section {
         let guard = self.stage.and_then(|s| s.push().ok());
         let t = Instant::now();
         let out = f();
-        self.seconds.set(self.seconds.get() + t.elapsed().as_secs_f64());
+        self.seconds
+            .set(self.seconds.get() + t.elapsed().as_secs_f64());
         drop(guard);
         out
     }

@@ -36,11 +36,16 @@ pub fn set_default(name: &str, value: &str) -> Result<()> {
 
 /// Options set for a while (a study variant's runs): [`Override::set`] puts each `-name value`
 /// into the database, over the options file and the command line, remembering what was there;
-/// dropping the guard puts the old values back (or clears the names that were not set).
+/// dropping the guard puts the old values back (or clears the names that were not set). The
+/// linear solver's defaults, which a run writes into the database when the user chose none
+/// (`ksp::set_linear_solver_defaults`), are put back too, so that they follow each run's own
+/// options and never leak from one run into the next.
 #[derive(Debug)]
 pub struct Override {
     /// Each name with its previous value: `None` = not set, `Some(None)` = set without value.
     previous: Vec<(CString, Option<Option<CString>>)>,
+    /// The names set (not the defaults only saved).
+    set: Vec<CString>,
 }
 
 impl Override {
@@ -48,17 +53,43 @@ impl Override {
     pub fn set(options: &[(String, Option<String>)]) -> Result<Override> {
         let mut guard = Override {
             previous: Vec::with_capacity(options.len()),
+            set: Vec::with_capacity(options.len()),
         };
+        for name in super::ksp::DEFAULTED_OPTIONS {
+            let n = CString::new(name).expect("option names have no NUL");
+            let before = current_value(&n)?;
+            guard.previous.push((n, before));
+        }
         for (name, value) in options {
             let n = CString::new(name.as_str()).expect("option names have no NUL");
-            let before = current_value(&n)?;
-            guard.previous.push((n.clone(), before));
+            if !guard.previous.iter().any(|(saved, _)| *saved == n) {
+                let before = current_value(&n)?;
+                guard.previous.push((n.clone(), before));
+            }
+            guard.set.push(n.clone());
             let v = value
                 .as_deref()
                 .map(|v| CString::new(v).expect("option values have no NUL"));
             set_value(&n, v.as_ref())?;
         }
         Ok(guard)
+    }
+}
+
+impl Override {
+    /// The options set that no PETSc object read (typos, or options of a solver not in use).
+    pub fn unused(&self) -> Vec<String> {
+        self.set
+            .iter()
+            .filter(|n| {
+                let mut used = p::PetscBool::PETSC_FALSE;
+                // SAFETY: a valid NUL-terminated name; the default database.
+                let code =
+                    unsafe { p::PetscOptionsUsed(std::ptr::null_mut(), n.as_ptr(), &mut used) };
+                code == 0 && used != p::PetscBool::PETSC_TRUE
+            })
+            .map(|n| n.to_string_lossy().into_owned())
+            .collect()
     }
 }
 
@@ -115,16 +146,24 @@ fn set_value(name: &CString, value: Option<&CString>) -> Result<()> {
 /// any other word is the value of the name before it. An error names the first stray value.
 pub fn parse(text: &str) -> std::result::Result<Vec<(String, Option<String>)>, String> {
     let mut out: Vec<(String, Option<String>)> = Vec::new();
+    if text.contains('\0') {
+        return Err("contains a NUL character".into());
+    }
     for word in text.split_whitespace() {
         let is_name = word.starts_with('-')
-            && word[1..].chars().next().is_some_and(|c| c.is_ascii_alphabetic());
+            && word[1..]
+                .chars()
+                .next()
+                .is_some_and(|c| c.is_ascii_alphabetic());
         if is_name {
             out.push((word.to_string(), None));
         } else {
             match out.last_mut() {
                 Some((_, value @ None)) => *value = Some(word.to_string()),
                 Some((name, Some(_))) => {
-                    return Err(format!("'{word}' follows {name} and its value: not an option"))
+                    return Err(format!(
+                        "'{word}' follows {name} and its value: not an option"
+                    ))
                 }
                 None => return Err(format!("'{word}' is not an option (options start with -)")),
             }

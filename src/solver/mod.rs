@@ -239,7 +239,6 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
             let contact_saved = model.contact.save();
             state.borrow_mut().assembly_seconds = 0.0;
             let t_solve = Instant::now();
-            let contact_before = contact_seconds(&model);
             if scene.predictor {
                 let p = Predictor {
                     scene,
@@ -251,6 +250,8 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                 p.apply(&mut x, &mut jac, &mut snes, t, t_new, &mut tangent_ready)?;
             }
             state.borrow_mut().t = t_new;
+            // The contact work of the Newton evaluations (the predictor's is in `solve`).
+            let contact_before = contact_seconds(&model);
             let assembly_stage = phases.stage("assembly");
             let solve_guard = phases.push("solve")?;
             let multipliers = model.tying.multipliers();

@@ -550,6 +550,24 @@ impl Results {
                 out.push((format!("max_rel_penetration_{}", iface.name), worst_rel));
             }
         }
+        if let Some(crate::case::Verification::Hertz {
+            radius,
+            interface,
+            model_fraction,
+            e_star,
+        }) = &scene.verification
+        {
+            out.extend(hertz_metrics(
+                scene,
+                model,
+                u,
+                world,
+                interface,
+                *radius,
+                *model_fraction,
+                *e_star,
+            ));
+        }
         if let Some(p0) = patch_pressure {
             let mut nodal = vec![0.0; u.len()];
             contact.add_nodal_forces(scene, u, &mut nodal);
@@ -569,6 +587,108 @@ impl Results {
         out
     }
 }
+
+/// The `hertz` verification's metrics (`crate::verify`, "Hertz"), from the nodal fields of
+/// the first pass of the contact interface `interface`, gathered on every rank: the force from
+/// the nodal forces, the contact radius and the peak pressure from the interpolated pressure
+/// field `p_h = sum_A p_A Phi_A` integrated over the current secondary faces.
+#[allow(clippy::too_many_arguments)]
+fn hertz_metrics(
+    scene: &Scene,
+    model: &Model,
+    u: &[f64],
+    world: &mpi::topology::SimpleCommunicator,
+    interface: &str,
+    radius: f64,
+    model_fraction: f64,
+    e_star: f64,
+) -> Vec<(String, f64)> {
+    use crate::contact::mortar::{sub_segments, traction_nodes, traction_shape};
+    use crate::verify::PressurePoint;
+    let contact = &model.contact;
+    let Some(i) = contact.interfaces.iter().position(|c| c.name == interface) else {
+        return Vec::new();
+    };
+    let Some(spec) = scene.interfaces.iter().find(|c| c.name == interface) else {
+        return Vec::new();
+    };
+    let scheme = spec.method.carrier_scheme(spec.scheme);
+    let fields = contact.pass_fields(scene, i, 0, u, world);
+    let pass = &contact.interfaces[i].passes[0];
+    let mesh = &scene.mesh;
+    let current =
+        |n: usize| -> [f64; 3] { std::array::from_fn(|c| mesh.coords[n][c] + u[3 * n + c]) };
+    // The force: the nodal forces' axial components.
+    let axial: f64 = fields
+        .iter()
+        .map(|f| f.area * f.pressure * f.normal[2])
+        .sum();
+    let force = axial.abs() / model_fraction;
+    let pressed = fields.iter().filter(|f| f.pressure > 0.0).count();
+    let max_pressure = fields.iter().map(|f| f.pressure).fold(0.0, f64::max);
+    // p_h at the quadrature points of every secondary face that carries a pressure.
+    let row = |n: usize| pass.nodes.binary_search(&n).ok();
+    let mut points = Vec::new();
+    let (mut phi, mut shape) = (Vec::new(), Vec::new());
+    for &face in &pass.secondary {
+        let kind = mesh.face_type(face);
+        let nodes = mesh.face_nodes(face);
+        let Ok(carriers) = traction_nodes(kind, scheme) else {
+            continue;
+        };
+        let p: Vec<f64> = carriers
+            .iter()
+            .map(|&k| row(nodes[k]).map_or(0.0, |r| fields[r].pressure))
+            .collect();
+        if p.iter().all(|&v| v <= 0.0) {
+            continue;
+        }
+        let x: Vec<[f64; 3]> = nodes.iter().map(|&n| current(n)).collect();
+        shape.resize(kind.num_nodes(), 0.0);
+        for (s, seg) in sub_segments(kind).iter().enumerate() {
+            let rule = seg.linear_kind().quadrature(HERTZ_QUADRATURE_DEGREE);
+            for (local, w) in rule.points.iter().zip(&rule.weights) {
+                let xi = seg.to_parent(*local);
+                traction_shape(kind, scheme, s, xi, &mut phi);
+                kind.shape(xi, &mut shape);
+                let (_, jac) = crate::fe::face_normal(kind, &x, xi);
+                let at: [f64; 3] = std::array::from_fn(|c| {
+                    shape.iter().zip(&x).map(|(n, xa)| n * xa[c]).sum::<f64>()
+                });
+                points.push(PressurePoint {
+                    r2: at[0] * at[0] + at[1] * at[1],
+                    pressure: phi.iter().zip(&p).map(|(f, v)| f * v).sum(),
+                    weight: w * seg.parent_jacobian() * jac,
+                });
+            }
+        }
+    }
+    let mut out = vec![
+        ("contact_force".to_string(), force),
+        ("hertz_contact_nodes".to_string(), pressed as f64),
+        ("max_pressure".to_string(), max_pressure),
+    ];
+    if force > 0.0 {
+        let (a_h, p0_h) = crate::verify::hertz(force, radius, e_star);
+        out.push(("hertz_contact_radius".into(), a_h));
+        out.push(("hertz_peak_pressure".into(), p0_h));
+        if let Some(m) = crate::verify::hertz_measure(&points) {
+            let ea = (m.contact_radius - a_h).abs() / a_h;
+            let ep = (m.peak_pressure - p0_h).abs() / p0_h;
+            out.push(("contact_radius".into(), m.contact_radius));
+            out.push(("peak_pressure".into(), m.peak_pressure));
+            out.push(("rel_error_contact_radius".into(), ea));
+            out.push(("rel_error_peak_pressure".into(), ep));
+            out.push(("rel_error_hertz".into(), ea.max(ep)));
+        }
+    }
+    out
+}
+
+/// Degree of the rule on each (sub-)segment for the Hertz measurement: exact for `p_h r^2 dA`
+/// on flat bilinear faces (degree 2 + 2 + 2 per direction, tensor Gauss), near it on curved
+/// quadratic ones.
+const HERTZ_QUADRATURE_DEGREE: usize = 7;
 
 fn row_field<'a>(
     name: &'static str,

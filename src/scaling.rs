@@ -1,0 +1,278 @@
+//! Strong scaling from PETSc logs: `mortar scaling LOG_1 LOG_2 ... [--out DIR]`.
+//!
+//! Each log is the `-log_view :FILE` summary of one run of the same scene on some number of
+//! ranks (`mortar run CASE -log_view :log_1.txt`, `mpirun -n 2 mortar run CASE -log_view
+//! :log_2.txt`). The runs' phases are PETSc log stages (the solver pushes them; see
+//! `crate::petsc::log`), grouped as:
+//!
+//! | phase | log stages |
+//! |---|---|
+//! | contact search | `Contact search` |
+//! | mortar integration | `Mortar integration` |
+//! | contact assembly | `Contact assembly` |
+//! | bulk assembly | `assembly` (the bulk elements, tied interfaces, PETSc's assembly) |
+//! | linear solve | `solve` (SNES: the linear solves, norms and updates) |
+//! | output | `output` |
+//! | start and setup | `Main Stage` (everything outside the other stages: PETSc's start, the
+//! partitioning, the dof numbering, the bulk work of the load-step predictor) and `setup` |
+//!
+//! The contact stages count every contact evaluation, the reactions of the output included
+//! (`summary.json` counts those of the Newton solves only). The case file is read and the mesh
+//! built before PETSc starts, so that serial part is in no stage and not in the wall times.
+//!
+//! The speedup of a phase on run `k` is its time on the first run over its time on run `k`
+//! (stage times are means over the ranks); the overall speedup is the ratio of the runs' wall
+//! times (`Time (sec)`, the maximum over the ranks). A frictional scene may take a different
+//! number of Newton iterations on 1 and 2 ranks (its path depends on round-off), so the table
+//! also gives each run's Newton iterations (`SNESJacobianEval` events) and the speedup of the
+//! wall time per Newton iteration. Outputs in `DIR` (default `out/scaling`):
+//! `scaling.csv` (`phase,ranks,seconds,speedup`, the overall time as phase `total`) and
+//! `scaling.png`/`.svg` (time against ranks on log-log axes: the total, the ideal
+//! `total_1 / ranks`, and the phases of `PLOTTED`).
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use crate::error::{Error, Result};
+use crate::io::output::write_atomic;
+use crate::io::petsc_log::PetscLog;
+use crate::io::plot;
+
+/// The phases reported, each with the log stages it sums.
+pub const PHASES: [(&str, &[&str]); 7] = [
+    ("contact search", &["Contact search"]),
+    ("mortar integration", &["Mortar integration"]),
+    ("contact assembly", &["Contact assembly"]),
+    ("bulk assembly", &["assembly"]),
+    ("linear solve", &["solve"]),
+    ("output", &["output"]),
+    ("start and setup", &["Main Stage", "setup"]),
+];
+
+/// The phases drawn in the plot (the others are small or constant).
+const PLOTTED: [&str; 4] = [
+    "linear solve",
+    "mortar integration",
+    "contact assembly",
+    "bulk assembly",
+];
+
+/// Scaling figures of several runs of one scene.
+#[derive(Clone, Debug)]
+pub struct Scaling {
+    /// The runs, in the order given.
+    pub runs: Vec<PetscLog>,
+}
+
+impl Scaling {
+    /// Reads the logs (at least 2).
+    pub fn read(logs: &[PathBuf]) -> Result<Scaling> {
+        if logs.len() < 2 {
+            return Err(Error::Other(format!(
+                "scaling needs at least 2 PETSc logs, got {}",
+                logs.len()
+            )));
+        }
+        let runs = logs
+            .iter()
+            .map(|p| PetscLog::read(p))
+            .collect::<Result<Vec<_>>>()?;
+        Ok(Scaling { runs })
+    }
+
+    /// The time of `phase` (one of [`PHASES`]) in run `k`: the sum of its stages.
+    pub fn phase_seconds(&self, k: usize, phase: &str) -> f64 {
+        let stages = PHASES
+            .iter()
+            .find(|(name, _)| *name == phase)
+            .map_or(&[][..], |p| p.1);
+        stages.iter().filter_map(|s| self.runs[k].stage(s)).sum()
+    }
+
+    /// The overall speedup of run `k` over the first run (wall times).
+    pub fn speedup(&self, k: usize) -> f64 {
+        self.runs[0].seconds / self.runs[k].seconds
+    }
+
+    /// The speedup of run `k` over the first run in wall time per Newton iteration; `None`
+    /// when a log has no Newton iterations.
+    pub fn speedup_per_newton_iteration(&self, k: usize) -> Option<f64> {
+        let per_iteration = |r: &PetscLog| Some(r.seconds / r.newton_iterations? as f64);
+        Some(per_iteration(&self.runs[0])? / per_iteration(&self.runs[k])?)
+    }
+
+    /// The table printed: one row per phase (and the total), the time of every run and the
+    /// speedup of every run after the first.
+    pub fn table(&self) -> String {
+        let mut out = format!("{:<20}", "phase");
+        for r in &self.runs {
+            let _ = write!(out, "{:>14}", format!("{} rank(s) s", r.ranks));
+        }
+        for r in &self.runs[1..] {
+            let _ = write!(out, "{:>14}", format!("speedup {}", r.ranks));
+        }
+        out.push('\n');
+        for (phase, _) in PHASES {
+            table_row(
+                &mut out,
+                phase,
+                (0..self.runs.len())
+                    .map(|k| self.phase_seconds(k, phase))
+                    .collect(),
+            );
+        }
+        table_row(
+            &mut out,
+            "total (wall)",
+            self.runs.iter().map(|r| r.seconds).collect(),
+        );
+        if self.runs.iter().all(|r| r.newton_iterations.is_some()) {
+            let _ = write!(out, "{:<20}", "Newton iterations");
+            for r in &self.runs {
+                let _ = write!(out, "{:>14}", r.newton_iterations.unwrap_or(0));
+            }
+            out.push('\n');
+            table_row(
+                &mut out,
+                "wall per iteration",
+                self.runs
+                    .iter()
+                    .map(|r| r.seconds / r.newton_iterations.unwrap_or(0) as f64)
+                    .collect(),
+            );
+        }
+        out
+    }
+
+    /// `scaling.csv`: `phase,ranks,seconds,speedup` (and the wall time per Newton iteration as
+    /// phase `per_newton_iteration`, when the logs count them).
+    pub fn csv(&self) -> String {
+        let mut out = String::from("phase,ranks,seconds,speedup\n");
+        for (k, r) in self.runs.iter().enumerate() {
+            for (phase, _) in PHASES {
+                let (first, mine) = (self.phase_seconds(0, phase), self.phase_seconds(k, phase));
+                let speedup = ratio(first, mine);
+                let _ = writeln!(out, "{phase},{},{mine},{speedup}", r.ranks);
+            }
+            let _ = writeln!(out, "total,{},{},{}", r.ranks, r.seconds, self.speedup(k));
+            if let (Some(its), Some(speedup)) =
+                (r.newton_iterations, self.speedup_per_newton_iteration(k))
+            {
+                let per = r.seconds / its as f64;
+                let _ = writeln!(out, "per_newton_iteration,{},{per},{speedup}", r.ranks);
+            }
+        }
+        out
+    }
+
+    /// Writes `scaling.csv` and `scaling.png`/`.svg` into `dir`; returns plot warnings.
+    pub fn write(&self, dir: &Path) -> Result<Vec<String>> {
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        write_atomic(&dir.join("scaling.csv"), self.csv().as_bytes())?;
+        let ranks = |k: usize| self.runs[k].ranks as f64;
+        let n = self.runs.len();
+        let mut series = vec![
+            plot::Series {
+                name: "total (wall)".into(),
+                points: (0..n).map(|k| (ranks(k), self.runs[k].seconds)).collect(),
+                ..Default::default()
+            },
+            plot::Series {
+                name: "ideal".into(),
+                points: (0..n)
+                    .map(|k| (ranks(k), self.runs[0].seconds * ranks(0) / ranks(k)))
+                    .collect(),
+                ..Default::default()
+            },
+        ];
+        for phase in PLOTTED {
+            series.push(plot::Series {
+                name: phase.into(),
+                points: (0..n)
+                    .map(|k| (ranks(k), self.phase_seconds(k, phase)))
+                    .collect(),
+                ..Default::default()
+            });
+        }
+        plot::loglog_points(
+            &dir.join("scaling"),
+            &format!(
+                "Strong scaling: speedup {:.2} on {} ranks",
+                self.speedup(n - 1),
+                self.runs[n - 1].ranks
+            ),
+            "ranks",
+            "wall time (s)",
+            &series,
+        )
+    }
+}
+
+/// One row of the table: the name, the time of every run, the speedup of every run after the
+/// first.
+fn table_row(out: &mut String, name: &str, seconds: Vec<f64>) {
+    let _ = write!(out, "{name:<20}");
+    for s in &seconds {
+        let _ = write!(out, "{s:>14.4}");
+    }
+    for s in &seconds[1..] {
+        let _ = write!(out, "{:>14.2}", ratio(seconds[0], *s));
+    }
+    out.push('\n');
+}
+
+/// A speedup: `before / after`, NaN when `after` is not positive (a phase the run did not
+/// have).
+fn ratio(before: f64, after: f64) -> f64 {
+    if after > 0.0 {
+        before / after
+    } else {
+        f64::NAN
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(ranks: usize, seconds: f64, stages: &[(&str, f64)]) -> PetscLog {
+        PetscLog {
+            ranks,
+            seconds,
+            stages: stages.iter().map(|(n, t)| (n.to_string(), *t)).collect(),
+            newton_iterations: Some(4 * ranks),
+        }
+    }
+
+    #[test]
+    fn phases_sum_their_stages_and_speedups_divide() {
+        let s = Scaling {
+            runs: vec![
+                run(
+                    1,
+                    10.0,
+                    &[("Main Stage", 1.0), ("setup", 0.5), ("solve", 6.0)],
+                ),
+                run(
+                    2,
+                    5.0,
+                    &[("Main Stage", 1.0), ("setup", 0.5), ("solve", 2.5)],
+                ),
+            ],
+        };
+        assert_eq!(s.phase_seconds(0, "start and setup"), 1.5);
+        assert_eq!(s.phase_seconds(1, "linear solve"), 2.5);
+        assert_eq!(s.phase_seconds(1, "mortar integration"), 0.0);
+        assert_eq!(s.speedup(1), 2.0);
+        let csv = s.csv();
+        assert!(csv.contains("linear solve,2,2.5,2.4\n"), "{csv}");
+        assert!(csv.contains("total,2,5,2\n"), "{csv}");
+        // 10 s for 4 iterations on 1 rank, 5 s for 8 on 2: 2.5 s against 0.625 s.
+        assert_eq!(s.speedup_per_newton_iteration(1), Some(4.0));
+        assert!(csv.ends_with("per_newton_iteration,2,0.625,4\n"), "{csv}");
+        let table = s.table();
+        let total = table.lines().find(|l| l.starts_with("total")).unwrap();
+        assert!(total.ends_with("2.00"), "{table}");
+        assert!(table.lines().last().unwrap().ends_with("4.00"), "{table}");
+    }
+}

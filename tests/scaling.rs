@@ -1,0 +1,118 @@
+//! `mortar scaling`: the PETSc logs of the contact patch scene on 1 and 2 ranks give a table of
+//! every phase, `scaling.csv` whose phases add up to the logged stages, the plot, and the last
+//! line `speedup: X` (the ratio of the logged wall times); a file that is not a PETSc log is
+//! one error line naming it.
+
+mod common;
+
+use std::path::Path;
+
+fn run_scaling(logs: &[&Path], out: &Path) -> std::process::Output {
+    common::mortar_command()
+        .arg("scaling")
+        .args(logs)
+        .arg("--out")
+        .arg(out)
+        .output()
+        .expect("cannot start mortar")
+}
+
+#[test]
+fn speedup_from_the_logs_of_one_and_two_ranks() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/contact_patch");
+    let case = common::write_case(
+        "scaling_patch",
+        &std::fs::read_to_string(dir.join("case.toml")).unwrap(),
+    );
+    let here = case.parent().unwrap();
+    std::fs::copy(dir.join("petscrc"), here.join("petscrc")).unwrap();
+    let mut logs = Vec::new();
+    let mut newton_its = Vec::new();
+    for ranks in [1, 2] {
+        let log = here.join(format!("log_{ranks}.txt"));
+        let view = format!("-log_view :{}", log.display());
+        let args: Vec<&str> = view.split(' ').chain(["-q"]).collect();
+        let (run_out, _) = common::run_case(&case, ranks, &args);
+        newton_its.push(common::metric(&run_out, "total_newton_its"));
+        logs.push(log);
+    }
+    let out = here.join("scaling");
+    let o = run_scaling(&[&logs[0], &logs[1]], &out);
+    let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(
+        o.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+
+    // The wall times of the logs ("Time (sec):", the maximum over the ranks).
+    let wall = |log: &Path| -> f64 {
+        let text = std::fs::read_to_string(log).unwrap();
+        let line = text.lines().find(|l| l.starts_with("Time (sec):")).unwrap();
+        line.split_whitespace().nth(2).unwrap().parse().unwrap()
+    };
+    let speedup = wall(&logs[0]) / wall(&logs[1]);
+    let last = stdout.lines().last().unwrap();
+    assert_eq!(last, format!("speedup: {speedup:.2}"), "{stdout}");
+    // The Newton iterations the logs count are the runs' own, and the speedup per iteration
+    // divides by them.
+    let per_iteration = speedup * newton_its[1] / newton_its[0];
+    assert!(
+        stdout.contains(&format!(
+            "speedup per Newton iteration: {per_iteration:.2}\n"
+        )),
+        "{per_iteration:.2} ({newton_its:?} iterations): {stdout}"
+    );
+    for phase in [
+        "mortar integration",
+        "contact search",
+        "bulk assembly",
+        "linear solve",
+    ] {
+        assert!(stdout.contains(phase), "{phase}: {stdout}");
+    }
+
+    // Every phase of every run; the phases add up to the logged stages (each stage in one phase).
+    let csv = std::fs::read_to_string(out.join("scaling.csv")).unwrap();
+    for (k, log) in logs.iter().enumerate() {
+        let ranks = (k + 1).to_string();
+        let phases: f64 = csv
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').collect::<Vec<_>>())
+            .filter(|f| f[1] == ranks && f[0] != "total" && f[0] != "per_newton_iteration")
+            .map(|f| f[2].parse::<f64>().unwrap())
+            .sum();
+        let text = std::fs::read_to_string(log).unwrap();
+        let stages: f64 = text
+            .lines()
+            .skip_while(|l| !l.starts_with("Summary of Stages"))
+            .skip(2)
+            .take_while(|l| l.contains(':'))
+            .map(|l| {
+                let (_, figures) = l.rsplit_once(": ").unwrap();
+                figures
+                    .split_whitespace()
+                    .next()
+                    .unwrap()
+                    .parse::<f64>()
+                    .unwrap()
+            })
+            .sum();
+        assert!(
+            phases > 0.0 && (phases - stages).abs() <= 1e-9 * stages,
+            "{phases} vs {stages}"
+        );
+    }
+    assert!(out.join("scaling.png").is_file() && out.join("scaling.svg").is_file());
+
+    // Not a PETSc log: one line naming the file.
+    let o = run_scaling(&[&logs[0], &case], &out);
+    let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.contains("case.toml") && stderr.contains("-log_view"),
+        "{stderr}"
+    );
+}
