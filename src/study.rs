@@ -104,7 +104,10 @@
 //!   error` (the metric, or the largest of the metrics; empty for a failed run), `seconds` (wall clock), `newton_its` (total over the steps
 //!   that converged), `converged` (`true`/`false`), `augmentations` (Uzawa, over the steps),
 //!   `peak_memory_mb` (peak resident memory of the run, largest over the ranks: Linux's
-//!   `VmHWM`, reset before each run), `on_front` (see below).
+//!   `VmHWM`, reset before each run; the runs share one process, whose allocator keeps the
+//!   memory an earlier, larger run freed, so a run after a larger one reports at least that:
+//!   order the variants from small to large, or read the first run of each size), `on_front`
+//!   (see below).
 //! - `summary.json` ([`Summary`]): `case` = the study name (the study file's stem), `converged` =
 //!   every run converged, `metrics`: `slope_<variant>` (least-squares slope of log(error)
 //!   against log(h) over the variant's converged runs, when there are two or more) and

@@ -1,0 +1,69 @@
+//! The Hertz scene (cases/hertz), in release mode: `cargo test --release --test hertz`.
+//!
+//! An elastic hemisphere pressed on an elastic block, frictionless mortar contact (see
+//! cases/hertz/README.md). Passing:
+//!
+//! - the scene as shipped, on one rank, measures a contact radius and a peak pressure within
+//!   3 % of Hertz's for its own contact force (`rel_error_contact_radius` and
+//!   `rel_error_peak_pressure` of summary.json, computed by `verification.kind = "hertz"`);
+//! - the same scene on two ranks (under `mpirun --timeout`) gives the same displacements and the
+//!   same metrics as on one rank, to round-off.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+/// Runs the shipped scene on `ranks` ranks into a fresh folder and returns it.
+fn run_scene(ranks: usize) -> PathBuf {
+    let case = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/hertz/case.toml");
+    let out = common::fresh_dir(&format!("hertz_{ranks}_ranks"));
+    let output = common::run_raw(&case, ranks, &out, &["-q"]);
+    assert!(
+        output.status.success(),
+        "the Hertz scene failed on {ranks} rank(s)\nstdout:\n{}\nstderr:\n{}",
+        String::from_utf8_lossy(&output.stdout),
+        String::from_utf8_lossy(&output.stderr)
+    );
+    out
+}
+
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "release only: cargo test --release --test hertz"
+)]
+fn contact_radius_and_peak_pressure_within_3_percent_of_hertz_on_1_and_2_ranks() {
+    let one = run_scene(1);
+    let m = |out: &Path, k: &str| common::metric(out, k);
+    for key in ["rel_error_contact_radius", "rel_error_peak_pressure"] {
+        let e = m(&one, key);
+        assert!(
+            (0.0..=0.03).contains(&e),
+            "{key} = {e} (contact radius {} against Hertz {}, peak pressure {} against {})",
+            m(&one, "contact_radius"),
+            m(&one, "hertz_contact_radius"),
+            m(&one, "peak_pressure"),
+            m(&one, "hertz_peak_pressure")
+        );
+    }
+    // Enough of the contact is resolved for the measurement to mean something.
+    assert!(m(&one, "hertz_contact_nodes") >= 20.0);
+
+    let two = run_scene(2);
+    assert_eq!(common::summary(&two)["ranks"], 2);
+    let d = common::max_rel_difference(&common::displacements(&one), &common::displacements(&two));
+    assert!(d < 1e-9, "1 vs 2 ranks: displacements differ by {d:e}");
+    for key in [
+        "contact_force",
+        "contact_radius",
+        "peak_pressure",
+        "rel_error_contact_radius",
+        "rel_error_peak_pressure",
+    ] {
+        let (a, b) = (m(&one, key), m(&two, key));
+        assert!(
+            (a - b).abs() <= 1e-9 * a.abs().max(1e-3),
+            "{key}: {a} on 1 rank, {b} on 2"
+        );
+    }
+}
