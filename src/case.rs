@@ -891,6 +891,11 @@ fn build_verification(
     }
 }
 
+/// Bounds of the generators' grading ratios (`box.grading`, `hemisphere_quarter`'s
+/// `pole_grading` and `radial_grading`): beyond them the cell sizes under- or overflow.
+const MIN_GRADING: f64 = 1e-6;
+const MAX_GRADING: f64 = 1e6;
+
 /// The `hertz` verification: its keys, its interface (a one-pass contact interface) and the
 /// E* of the bodies on its two sides.
 fn build_hertz(
@@ -938,6 +943,13 @@ fn build_hertz(
             "verification.interface = \"{name}\": hertz measures the pressures of a one-pass \
              interface (this one has {} passes)",
             iface.passes
+        ));
+    }
+    if iface.friction != 0.0 {
+        return Err(format!(
+            "verification.interface = \"{name}\": Hertz's solution is frictionless, but this \
+             interface has friction = {}",
+            iface.friction
         ));
     }
     // E and nu of each side's body (one material per side).
@@ -1125,9 +1137,13 @@ fn build_part(p: &MeshPart, i: usize, dir: &Path, err: &dyn Fn(String) -> Error)
                 )));
             }
             let grading = p.grading.unwrap_or([1.0; 3]);
-            if let Some(g) = grading.iter().find(|g| !(g.is_finite() && **g > 0.0)) {
+            if let Some(g) = grading
+                .iter()
+                .find(|g| !(**g >= MIN_GRADING && **g <= MAX_GRADING))
+            {
                 return Err(err(format!(
-                    "{key}.grading = {grading:?}: every entry must be finite and > 0 (got {g})"
+                    "{key}.grading = {grading:?}: every entry must be in [{MIN_GRADING:e}, \
+                     {MAX_GRADING:e}] (got {g})"
                 )));
             }
             let zone = p.grading_zone.unwrap_or([0.0; 3]);
@@ -1136,6 +1152,12 @@ fn build_part(p: &MeshPart, i: usize, dir: &Path, err: &dyn Fn(String) -> Error)
                     return Err(err(format!(
                         "{key}.grading_zone = {zone:?}: every entry must be >= 0 and below the \
                          box's length along its axis"
+                    )));
+                }
+                if zone[d] > 0.0 && grading[d] == 1.0 {
+                    return Err(err(format!(
+                        "{key}.grading_zone = {zone:?}: axis {d} has a zone but no grading \
+                         (grading[{d}] = 1)"
                     )));
                 }
             }
@@ -1181,10 +1203,12 @@ fn build_part(p: &MeshPart, i: usize, dir: &Path, err: &dyn Fn(String) -> Error)
             }
             let grading = |v: Option<f64>, name: &str| -> Result<f64> {
                 let g = v.unwrap_or(1.0);
-                if g.is_finite() && g >= 1.0 {
+                if (1.0..=MAX_GRADING).contains(&g) {
                     Ok(g)
                 } else {
-                    Err(err(format!("{key}.{name} = {g}: must be finite and >= 1")))
+                    Err(err(format!(
+                        "{key}.{name} = {g}: must be in [1, {MAX_GRADING:e}]"
+                    )))
                 }
             };
             let pole = grading(p.pole_grading, "pole_grading")?;
@@ -1202,6 +1226,11 @@ fn build_part(p: &MeshPart, i: usize, dir: &Path, err: &dyn Fn(String) -> Error)
                 return Err(err(format!(
                     "{key}.pole_zone = {zone}: must be >= 0 and below 0.9 pi R / 2 (an arc \
                      length on the sphere)"
+                )));
+            }
+            if zone > 0.0 && pole == 1.0 {
+                return Err(err(format!(
+                    "{key}.pole_zone = {zone}: has no effect without pole_grading > 1"
                 )));
             }
             generate::hemisphere_quarter(kind, nc, nr, r, pole, zone, radial, &p.body)

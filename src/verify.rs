@@ -58,7 +58,7 @@
 //!   `p0 = mean(p_h over r < a/2) / f(1/2)` ([`hertz_disc_mean_factor`]).
 //!
 //! Why these. The nodal pressures of a mortar contact between non-matching meshes scatter
-//! around the exact field at the scale of the elements (by up to +-20 % on the coarse meshes of
+//! around the exact field at the scale of the elements (by up to +-25-30 % on the coarse meshes of
 //! the Hertz scene, most near the edge of the contact, where the exact pressure has an infinite
 //! slope and a node's pressure is a weighted mean over its support), and the outermost pressed
 //! node lies anywhere within one element of the edge. So any one node, the outermost pressed one

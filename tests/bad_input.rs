@@ -283,6 +283,21 @@ fn rows() -> Vec<Row> {
             valid_with("divisions = [1, 1, 1]", "divisions = [1, 1, 1]\ngrading = [1.0, 0.0, 1.0]"),
             "mesh[0].grading",
         ),
+        check(
+            "box_grading_subnormal",
+            valid_with("divisions = [1, 1, 1]", "divisions = [1, 1, 1]\ngrading = [1.0, 1e-310, 1.0]\ngrading_zone = [0.0, 0.5, 0.0]"),
+            "mesh[0].grading",
+        ),
+        check(
+            "box_grading_zone_on_an_ungraded_axis",
+            valid_with("divisions = [1, 1, 1]", "divisions = [1, 1, 1]\ngrading_zone = [0.5, 0.0, 0.0]"),
+            "mesh[0].grading_zone",
+        ),
+        check(
+            "hemisphere_pole_zone_without_pole_grading",
+            text(&HEMISPHERE_NO_RADIUS.replace("n_rad = 1", "n_rad = 1\nradius = 1.0\npole_zone = 0.2")),
+            "mesh[0].pole_zone",
+        ),
         // --- Gmsh files.
         run("missing_gmsh_file", text(GMSH), "mesh.msh"),
         check("truncated_msh", text(GMSH), "mesh.msh")

@@ -113,11 +113,12 @@ pub struct MeshPart {
     pub hi: Option<[f64; 3]>,
     /// box: geometric grading per axis, the last cell's length over the first's (cells grow in
     /// a constant ratio; 1 = uniform, > 1 finer toward `lo`, < 1 finer toward `hi`), each
-    /// finite and > 0. Default `[1, 1, 1]`.
+    /// in [1e-6, 1e6]. Default `[1, 1, 1]`.
     pub grading: Option<[f64; 3]>,
     /// box: per axis, the length from the fine end (`lo` for a grading above 1, `hi` below 1)
     /// that keeps uniform cells before they grow; `grading` is then the spacing at the coarse
-    /// end over the zone's. Each in `[0, hi - lo)`. Default `[0, 0, 0]` (no zone).
+    /// end over the zone's. Each in `[0, hi - lo)`, and non-zero only on a graded axis.
+    /// Default `[0, 0, 0]` (no zone).
     pub grading_zone: Option<[f64; 3]>,
     /// beam: length (x), width (y), height (z).
     pub length: Option<f64>,
@@ -139,15 +140,15 @@ pub struct MeshPart {
     /// `mesh::generate::hemisphere_quarter`.
     pub radius: Option<f64>,
     /// hemisphere_quarter: grading toward the pole, the polar-angle spacing of the surface
-    /// nodes at the equator over that at the pole (>= 1; 1 = none). Default 1.
+    /// nodes at the equator over that at the pole (in [1, 1e6]; 1 = none). Default 1.
     pub pole_grading: Option<f64>,
     /// hemisphere_quarter: the arc length from the pole (on the sphere) over which the polar
     /// spacing stays uniform (the fine cap, where the contact is) before it grows; with it,
-    /// `pole_grading` is the spacing at the equator over the cap's. Default 0: the spacing
-    /// grows from the pole on.
+    /// `pole_grading` is the spacing at the equator over the cap's. In `[0, 0.9 pi R / 2)`, and
+    /// only with `pole_grading` > 1. Default 0: the spacing grows from the pole on.
     pub pole_zone: Option<f64>,
     /// hemisphere_quarter: grading of the shell toward the surface, the innermost layer's
-    /// thickness over the outermost's (>= 1; 1 = uniform). Default 1.
+    /// thickness over the outermost's (in [1, 1e6]; 1 = uniform). Default 1.
     pub radial_grading: Option<f64>,
     /// gmsh: the .msh file (format 4.1, ASCII or binary).
     pub file: Option<String>,
@@ -514,7 +515,8 @@ pub struct VerificationSpec {
     /// hertz: the radius R of the sphere pressed on the flat (for two spheres, the effective
     /// radius 1/R = 1/R1 + 1/R2), > 0. Required.
     pub radius: Option<f64>,
-    /// hertz: the name of the contact interface between the two bodies (one pass). Its
+    /// hertz: the name of the contact interface between the two bodies (one pass,
+    /// frictionless). Its
     /// secondary side's nodal pressures are measured; each side's body gives E and nu to
     /// 1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2. Required.
     pub interface: Option<String>,

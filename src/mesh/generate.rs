@@ -78,7 +78,11 @@
 //! `pole_grading` times that at the equator) sampled at the `2 n_circ + 1` equal-angle polar
 //! angles of the cell corners along a meridian and linear in between, so that within a cell
 //! the map is a rotation by a linear function of the angle and the mid-nodes of quadratic
-//! elements stay halfway (in angle) between their corners even where the cells grow fast. In
+//! elements stay halfway (in angle) between their corners even where the cells grow fast.
+//! (Exactly so on the symmetry-plane meridians, whose cell corners lie at those knots; inside
+//! the polar patch a cell's corners are off the knots and may straddle one, so there the
+//! mid-nodes are near halfway: the unit tests check every element's Jacobian at the gradings
+//! used.) In
 //! the `(r, theta)` plane its Jacobian determinant is `1 - w + w G'(theta) > 0`, so it is
 //! orientation preserving; it keeps the sphere, the flat
 //! face `theta = pi/2`, the symmetry planes (azimuth 0 and pi/2) and the axis, so sets and the

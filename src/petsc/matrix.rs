@@ -9,8 +9,8 @@
 //! assembly drops every preallocated slot that holds no value, so a contact block that is empty
 //! at the first assembly (the bodies not touching yet) would otherwise lose its slots and cost
 //! one reallocation of the row storage per entry when contact begins (measured on the scaling
-//! scene: 3067 reallocations in its first step, the contact assembly 10x slower on one rank
-//! than on two). With the pattern kept, the matrix's nonzero structure is also the same in
+//! scene: 3067 reallocations in its first step, the contact assembly 8.5 times slower on
+//! one rank than on two). With the pattern kept, the matrix's nonzero structure is also the same in
 //! every Newton iteration of a step, so the LU's symbolic factorization can be reused.
 
 use petsc_ffi as p;

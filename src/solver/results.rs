@@ -686,7 +686,7 @@ fn hertz_metrics(
 }
 
 /// Degree of the rule on each (sub-)segment for the Hertz measurement: exact for `p_h r^2 dA`
-/// on flat bilinear faces (degree 2 + 2 + 2 per direction, tensor Gauss), near it on curved
+/// on flat bilinear faces (degree 1 + 2 + 1 per direction, tensor Gauss), near it on curved
 /// quadratic ones.
 const HERTZ_QUADRATURE_DEGREE: usize = 7;
 

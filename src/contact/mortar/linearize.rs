@@ -113,12 +113,13 @@
 //! then chained with `dP/dy` once per sub-segment pair. Scheme 3 skips the traction nodes that
 //! are not vertices of the secondary sub-segment. Nothing is allocated per point. Measured
 //! (release, one core, the pairs of `benches/mortar.rs`, scheme 2): Quad4-Quad4 46 us per pair
-//! (7 times `integrate_pair`), Quad9-Quad9 1.2 ms (8 times).
+//! (7 times `integrate_pair`), Quad9-Quad9 1.25 ms (9 times).
 //!
 //! # Tests
 //!
 //! Against the dual-number formulation of level 2 (`dual_reference`): values bit for bit,
-//! derivatives to 1e-13 of the largest (bit for bit in fact). Against [`super::integrate_pair`] for all 25 face-type pairs and every valid scheme on tilted,
+//! derivatives to 1e-13 of the largest (measured: bit for bit as well, over 6 489 pairs of the
+//! bending scene and 2.0e6 numbers of generic pairs; the test asks for less). Against [`super::integrate_pair`] for all 25 face-type pairs and every valid scheme on tilted,
 //! curved, perturbed, partially overlapping faces: the values (1e-13 of the largest weight) and
 //! the derivatives against central finite differences; the momentum identity
 //! `sum_b dn1_kb = sum_c dn2_kc`; frame indifference (zero derivative along rigid translations
