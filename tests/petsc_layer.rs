@@ -159,7 +159,23 @@ fn petsc_layer_boundary_behaviour() {
         other => panic!("expected a PETSc error, got {other:?}"),
     }
 
-    // 6. A linear solve through the KSP wrapper: diag(2 x) y = 1 with x = 2, so y = 1/4.
+    // 6. The whole preallocated pattern survives an assembly that leaves part of it empty (a
+    // contact block before the bodies touch): a later entry there is no new nonzero, though new
+    // nonzeros are errors.
+    let mut wide = Sparsity {
+        row_start: 0,
+        rows: (0..N as i32).map(|i| vec![i]).collect(),
+    };
+    wide.rows[0].push(1);
+    let mut m = Matrix::new_aij(&wide).unwrap();
+    m.add_values(&[0], &[0], &[1.0]).unwrap();
+    m.assemble().unwrap();
+    m.add_values(&[0], &[1], &[2.0]).unwrap();
+    m.assemble().unwrap();
+    assert_eq!(m.get_values(&[0], &[0, 1]).unwrap(), vec![1.0, 2.0]);
+    drop(m);
+
+    // 7. A linear solve through the KSP wrapper: diag(2 x) y = 1 with x = 2, so y = 1/4.
     let mut b = Vector::new_mpi(N).unwrap();
     b.set_all(1.0).unwrap();
     let mut y = Vector::new_mpi(N).unwrap();
