@@ -1076,6 +1076,22 @@ fn build_part(p: &MeshPart, i: usize, dir: &Path, err: &dyn Fn(String) -> Error)
             Err(err(format!("{key}.{name} = {v}: must be > 0")))
         }
     };
+    // The sphere generators' n_circ and n_rad: required, >= 1.
+    let sphere_cells = || -> Result<(usize, usize)> {
+        let cells = |v: Option<usize>, name: &str| {
+            v.ok_or_else(|| {
+                err(format!(
+                    "{key}.{name} is required for generator \"{}\"",
+                    p.generator
+                ))
+            })
+        };
+        let (nc, nr) = (cells(p.n_circ, "n_circ")?, cells(p.n_rad, "n_rad")?);
+        if nc == 0 || nr == 0 {
+            return Err(err(format!("{key}: n_circ and n_rad must be >= 1")));
+        }
+        Ok((nc, nr))
+    };
     let element = || -> Result<ElementType> {
         let name = p
             .element
@@ -1179,28 +1195,12 @@ fn build_part(p: &MeshPart, i: usize, dir: &Path, err: &dyn Fn(String) -> Error)
                     "{key}: outer_radius {b} must exceed inner_radius {a}"
                 )));
             }
-            let nc = p
-                .n_circ
-                .ok_or_else(|| err(format!("{key}.n_circ is required")))?;
-            let nr = p
-                .n_rad
-                .ok_or_else(|| err(format!("{key}.n_rad is required")))?;
-            if nc == 0 || nr == 0 {
-                return Err(err(format!("{key}: n_circ and n_rad must be >= 1")));
-            }
+            let (nc, nr) = sphere_cells()?;
             generate::thick_sphere_octant(element()?, nc, nr, a, b, &p.body)
         }
         "hemisphere_quarter" => {
             let r = positive(need(p.radius, "radius")?, "radius")?;
-            let nc = p
-                .n_circ
-                .ok_or_else(|| err(format!("{key}.n_circ is required for generator \"hemisphere_quarter\"")))?;
-            let nr = p
-                .n_rad
-                .ok_or_else(|| err(format!("{key}.n_rad is required for generator \"hemisphere_quarter\"")))?;
-            if nc == 0 || nr == 0 {
-                return Err(err(format!("{key}: n_circ and n_rad must be >= 1")));
-            }
+            let (nc, nr) = sphere_cells()?;
             let grading = |v: Option<f64>, name: &str| -> Result<f64> {
                 let g = v.unwrap_or(1.0);
                 if (1.0..=MAX_GRADING).contains(&g) {

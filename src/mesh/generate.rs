@@ -590,14 +590,7 @@ pub fn thick_sphere_octant(
             ("zmin", "inner"),
             ("zmax", "outer"),
         ];
-        patch.face_sets = rename
-            .iter()
-            .filter_map(|(from, to)| patch.face_sets.remove(*from).map(|v| (to.to_string(), v)))
-            .collect();
-        patch.node_sets = rename
-            .iter()
-            .filter_map(|(from, to)| patch.node_sets.remove(*from).map(|v| (to.to_string(), v)))
-            .collect();
+        keep_sets_renamed(&mut patch, &rename);
         out.merge(patch);
     }
     out.merge_coincident_nodes(1e-6);
@@ -727,18 +720,24 @@ pub fn hemisphere_quarter(
             .zip(names)
             .filter(|(_, to)| !to.is_empty())
             .collect();
-        part.face_sets = rename
-            .iter()
-            .filter_map(|(from, to)| part.face_sets.remove(*from).map(|v| (to.to_string(), v)))
-            .collect();
-        part.node_sets = rename
-            .iter()
-            .filter_map(|(from, to)| part.node_sets.remove(*from).map(|v| (to.to_string(), v)))
-            .collect();
+        keep_sets_renamed(&mut part, &rename);
         out.merge(part);
     }
     out.merge_coincident_nodes(1e-6);
     out
+}
+
+/// Keeps only the face and node sets named in `rename` (`(from, to)` pairs), under their new
+/// names: a patch's box sets become the sets of the shape it is mapped to.
+fn keep_sets_renamed(mesh: &mut Mesh, rename: &[(&str, &str)]) {
+    mesh.face_sets = rename
+        .iter()
+        .filter_map(|(from, to)| mesh.face_sets.remove(*from).map(|v| (to.to_string(), v)))
+        .collect();
+    mesh.node_sets = rename
+        .iter()
+        .filter_map(|(from, to)| mesh.node_sets.remove(*from).map(|v| (to.to_string(), v)))
+        .collect();
 }
 
 /// The polar grading of [`hemisphere_quarter`]: `G` at the equal-angle knots
