@@ -88,12 +88,18 @@
 //! # Parallel layout
 //!
 //! The mesh is replicated and every rank gathers the displacements of every contact surface
-//! node. The owner of a traction node computes everything of that node: it integrates every face
-//! pair whose secondary face carries a node it owns (faces on a partition boundary are thus
-//! integrated by each rank involved), sums them in a canonical order (by secondary face, then
-//! primary face), and adds the node's forces and tangent block into the distributed vector and
-//! matrix, whatever ranks own the rows. The results are therefore independent of the partition
-//! up to the summation order of PETSc's assembly.
+//! node. The contact work is dealt out by traction node, independently of the element
+//! partition, because METIS balances elements, and a partition that cuts across the interface
+//! would leave the whole surface to one rank: the passes of an interface are dealt to blocks of
+//! ranks ([`pass_ranks`]; on two ranks each pass of a two-pass interface goes whole to one
+//! rank), and each pass's nodes are cut into strips of equal counts along the longest side of
+//! the secondary surface, one strip per rank of its block ([`deal_in_strips`]). The rank holding a traction node computes everything of that node, its Uzawa
+//! multipliers and history included: it integrates every face pair whose secondary face carries
+//! a node it holds (faces straddling a cut are thus integrated by both ranks), sums them in a
+//! canonical order (by secondary face, then primary face), and adds the node's forces and
+//! tangent block into the distributed vector and matrix, whatever ranks own the rows. The
+//! results are therefore independent of the partition up to the summation order of PETSc's
+//! assembly.
 //!
 //! # Matrix pattern
 //!
@@ -110,6 +116,7 @@ use mpi::collective::{CommunicatorCollectives, SystemOperation};
 use mpi::topology::SimpleCommunicator;
 
 use crate::case::{ContactMethod, Interface, InterfaceKind, Scene};
+use crate::contact::block_sum::BlockSum;
 use crate::contact::law::{
     friction_traction, normal_pressure_touching, uzawa_update, FrictionResult, LawParams,
     NodeHistory, Status,
@@ -209,9 +216,10 @@ pub struct ContactPass {
     carriers: Vec<Vec<usize>>,
     /// Per traction node.
     pub state: Vec<NodeState>,
-    /// Secondary faces that carry a node this rank owns (the faces it integrates).
+    /// Secondary faces that carry a node this rank holds (the faces it integrates).
     local_faces: Vec<usize>,
-    /// Owned traction nodes (indices into `nodes`).
+    /// The traction nodes whose contact work this rank does (indices into `nodes`; see
+    /// "Parallel layout").
     owned: Vec<usize>,
     /// Symmetry constraints `(node, axis)` of the secondary surface (for the normals).
     symmetry: Vec<(usize, usize)>,
@@ -254,7 +262,6 @@ pub struct ContactInterface {
 pub struct ContactInterfaces {
     pub interfaces: Vec<ContactInterface>,
     rank: usize,
-    node_owner: Vec<usize>,
     /// Positions of every node at the last converged step.
     x_old: Vec<[f64; 3]>,
     /// Every pressed node sticks (the stick predictor), whatever its Coulomb cone.
@@ -353,7 +360,10 @@ impl ContactInterfaces {
                 } else {
                     (&iface.primary, &iface.secondary)
                 };
-                passes.push(ContactPass::new(scene, dofs, iface, sec, pri, &young)?);
+                let workers = pass_ranks(pass, iface.passes, dofs.ranks);
+                passes.push(ContactPass::new(
+                    scene, dofs, iface, sec, pri, &young, workers,
+                )?);
             }
             interfaces.push(ContactInterface {
                 name: iface.name.clone(),
@@ -374,7 +384,6 @@ impl ContactInterfaces {
         Ok(ContactInterfaces {
             interfaces,
             rank: dofs.rank,
-            node_owner: dofs.node_owner.clone(),
             x_old: scene.mesh.coords.clone(),
             stick_all: Default::default(),
             timings: ContactTimings::default(),
@@ -433,10 +442,13 @@ impl ContactInterfaces {
         u: &[f64],
         jac: &mut Matrix,
     ) -> Result<Option<String>> {
-        self.assemble(scene, u, true, |block| {
-            let idx = global_dofs(dofs, &block.slots);
-            jac.add_values(&idx, &idx, &block.tangent)
-        })
+        let mut sum = BlockSum::default();
+        let failure = self.assemble(scene, u, true, |block| {
+            sum.add(&block.slots, &block.tangent);
+            Ok(())
+        })?;
+        self.timings.assembly.time(|| sum.add_to(dofs, jac))?;
+        Ok(failure)
     }
 
     /// Adds the contact forces of the owned nodes at every dof (constrained ones included)
@@ -855,11 +867,6 @@ impl ContactInterfaces {
         }
     }
 
-    /// The owner rank of each node.
-    pub fn node_owner(&self) -> &[usize] {
-        &self.node_owner
-    }
-
     /// This rank.
     pub fn rank(&self) -> usize {
         self.rank
@@ -895,6 +902,7 @@ impl ContactPass {
         sec: &[FaceRef],
         pri: &[FaceRef],
         young: &[f64],
+        workers: std::ops::Range<usize>,
     ) -> Result<ContactPass> {
         let mesh = &scene.mesh;
         let data = |faces: &[FaceRef]| -> Vec<FaceData> {
@@ -938,15 +946,16 @@ impl ContactPass {
                 ..Default::default()
             })
             .collect();
+        let points: Vec<[f64; 3]> = nodes.iter().map(|&n| mesh.coords[n]).collect();
+        let contact_owner: Vec<usize> = deal_in_strips(&points, workers.len())
+            .into_iter()
+            .map(|strip| workers.start + strip)
+            .collect();
         let owned: Vec<usize> = (0..nodes.len())
-            .filter(|&a| dofs.node_owner[nodes[a]] == dofs.rank)
+            .filter(|&a| contact_owner[a] == dofs.rank)
             .collect();
         let local_faces: Vec<usize> = (0..sec_faces.len())
-            .filter(|&s| {
-                carriers[s]
-                    .iter()
-                    .any(|&a| dofs.node_owner[nodes[a]] == dofs.rank)
-            })
+            .filter(|&s| carriers[s].iter().any(|&a| contact_owner[a] == dofs.rank))
             .collect();
         let surface: std::collections::BTreeSet<usize> = sec_faces
             .iter()
@@ -1651,6 +1660,47 @@ fn full_integrals(
     (a, h)
 }
 
+/// The ranks that share the contact work of pass `pass` of `passes`: the passes of an
+/// interface are dealt out first, so that on two ranks the two passes of a two-pass interface
+/// go one to each rank whole (no face is integrated twice); with more ranks than passes, each
+/// pass gets its own block of ranks, which [`deal_in_strips`] then shares out.
+fn pass_ranks(pass: usize, passes: usize, ranks: usize) -> std::ops::Range<usize> {
+    if ranks >= passes {
+        pass * ranks / passes..(pass + 1) * ranks / passes
+    } else {
+        let rank = pass * ranks / passes;
+        rank..rank + 1
+    }
+}
+
+/// The strip (of `strips`) that does the contact work of each traction node: the nodes, sorted along the
+/// longest side of their bounding box (reference positions; ties by index), cut into `strips`
+/// strips of equal counts. Independent of the element partition on purpose: METIS balances
+/// elements, and a partition that cuts across the interface leaves a whole contact surface to
+/// one rank. The face row straddling each cut is integrated by both neighbours.
+fn deal_in_strips(points: &[[f64; 3]], strips: usize) -> Vec<usize> {
+    let axis = (0..3)
+        .max_by(|&i, &j| {
+            let extent = |c: usize| {
+                let (lo, hi) = points
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |b, p| {
+                        (b.0.min(p[c]), b.1.max(p[c]))
+                    });
+                hi - lo
+            };
+            extent(i).total_cmp(&extent(j)).then(j.cmp(&i))
+        })
+        .unwrap_or(0);
+    let mut order: Vec<usize> = (0..points.len()).collect();
+    order.sort_by(|&a, &b| points[a][axis].total_cmp(&points[b][axis]).then(a.cmp(&b)));
+    let mut owner = vec![0; points.len()];
+    for (position, &a) in order.iter().enumerate() {
+        owner[a] = position * strips / points.len();
+    }
+    owner
+}
+
 /// Current positions `X + u` of every node.
 fn current_positions(scene: &Scene, u: &[f64]) -> Vec<[f64; 3]> {
     scene
@@ -1682,4 +1732,46 @@ fn norm(v: &[f64]) -> f64 {
 fn tangential(v: [f64; 3], nu: [f64; 3]) -> [f64; 3] {
     let d = dot(v, nu);
     std::array::from_fn(|c| v[c] - d * nu[c])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{deal_in_strips, pass_ranks};
+
+    #[test]
+    fn passes_are_dealt_before_strips() {
+        // Two passes on two ranks: one each, whole.
+        assert_eq!(pass_ranks(0, 2, 2), 0..1);
+        assert_eq!(pass_ranks(1, 2, 2), 1..2);
+        // One pass: every rank shares it.
+        assert_eq!(pass_ranks(0, 1, 2), 0..2);
+        // Two passes on one rank, or on four ranks.
+        assert_eq!(pass_ranks(1, 2, 1), 0..1);
+        assert_eq!(pass_ranks(1, 2, 4), 2..4);
+        // Two passes on three ranks: blocks of 1 and 2.
+        assert_eq!(pass_ranks(0, 2, 3), 0..1);
+        assert_eq!(pass_ranks(1, 2, 3), 1..3);
+    }
+
+    #[test]
+    fn strips_split_along_the_longest_side_in_equal_counts() {
+        // A 5 x 3 grid of points, longer along y: two ranks take the lower and upper rows.
+        let points: Vec<[f64; 3]> = (0..15)
+            .map(|i| [(i % 3) as f64, (i / 3) as f64, 1.0])
+            .collect();
+        let owner = deal_in_strips(&points, 2);
+        let counts = [0, 1].map(|r| owner.iter().filter(|&&o| o == r).count());
+        assert_eq!(counts, [8, 7]);
+        for (p, &o) in points.iter().zip(&owner) {
+            match p[1] {
+                y if y < 2.0 => assert_eq!(o, 0),
+                y if y > 2.0 => assert_eq!(o, 1),
+                _ => {}
+            }
+        }
+        // One rank holds everything; more ranks than points leave some empty.
+        assert!(deal_in_strips(&points, 1).iter().all(|&o| o == 0));
+        let many = deal_in_strips(&points[..2], 4);
+        assert_eq!(many, vec![0, 2]);
+    }
 }

@@ -12,7 +12,9 @@
 //!   traction transport, Uzawa updates) with their derivatives: physics only.
 //! - [`frictional`]: frictional contact on current mortar weights: gaps, slip, the laws,
 //!   Uzawa, the consistent tangent, and their assembly into the distributed system.
+//! - [`block_sum`]: sums the dense node blocks of a tangent into sparse node rows before PETSc.
 
+pub mod block_sum;
 pub mod frictional;
 pub mod law;
 pub mod mortar;

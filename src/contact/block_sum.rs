@@ -1,0 +1,159 @@
+//! Sums the dense node blocks of an interface tangent before they go to PETSc.
+//!
+//! Each traction node contributes a dense `3m x 3m` block over the `m` nodes of its stencil
+//! (the faces carrying it and the primary faces they meet), and neighbouring nodes share most
+//! of their stencils: summed one block at a time, PETSc would look up every entry of every
+//! block (several times the number of nonzeros), and on more than one rank ship every
+//! off-rank entry through its stash. [`BlockSum`] adds the blocks into one sparse row of
+//! `3 x 3` blocks per node (columns sorted by node, merged with the block's sorted slots), and
+//! [`BlockSum::add_to`] then hands PETSc each node row once, with every column it holds.
+//!
+//! The sums are taken in the order the blocks arrive, entry by entry, so they do not depend on
+//! the number of ranks beyond what PETSc's own assembly adds.
+
+use std::collections::HashMap;
+
+use crate::dofs::DofMap;
+use crate::error::Result;
+use crate::petsc::{Matrix, PetscInt};
+
+/// One node row: `(column node, 3 x 3 block row-major)`, sorted by column node.
+type NodeRow = Vec<(usize, [f64; 9])>;
+
+/// A sparse sum of dense node blocks: one row of `3 x 3` blocks per node.
+#[derive(Default)]
+pub struct BlockSum {
+    /// Row of each node that has one.
+    row_of: HashMap<usize, usize>,
+    /// Per row: its node and its blocks.
+    rows: Vec<(usize, NodeRow)>,
+}
+
+impl BlockSum {
+    /// Adds the dense block `tangent` (row-major `3m x 3m`) over the nodes `slots` (`3 slot + c`
+    /// order; a node may appear once only).
+    ///
+    /// # Panics
+    /// If `tangent` does not hold `(3 slots.len())^2` entries.
+    pub fn add(&mut self, slots: &[usize], tangent: &[f64]) {
+        let m = slots.len();
+        assert_eq!(tangent.len(), 9 * m * m, "BlockSum::add: wrong block size");
+        let mut by_node: Vec<usize> = (0..m).collect();
+        by_node.sort_unstable_by_key(|&s| slots[s]);
+        for (a, &node) in slots.iter().enumerate() {
+            let next = self.rows.len();
+            let r = *self.row_of.entry(node).or_insert(next);
+            if r == next {
+                self.rows.push((node, Vec::new()));
+            }
+            let row = &mut self.rows[r].1;
+            let mut k = 0;
+            for &b in &by_node {
+                let col = slots[b];
+                while k < row.len() && row[k].0 < col {
+                    k += 1;
+                }
+                if k == row.len() || row[k].0 != col {
+                    row.insert(k, (col, [0.0; 9]));
+                }
+                let block = &mut row[k].1;
+                for i in 0..3 {
+                    let from = &tangent[(3 * a + i) * 3 * m + 3 * b..][..3];
+                    for j in 0..3 {
+                        block[3 * i + j] += from[j];
+                    }
+                }
+            }
+        }
+    }
+
+    /// Adds the sum into `jac` (not assembled): one `MatSetValues` per node row; constrained
+    /// dofs (global index -1) are left out by PETSc.
+    pub fn add_to(&self, dofs: &DofMap, jac: &mut Matrix) -> Result<()> {
+        let mut cols: Vec<PetscInt> = Vec::new();
+        let mut vals: Vec<f64> = Vec::new();
+        for (node, row) in &self.rows {
+            let rows = &dofs.global[3 * node..3 * node + 3];
+            if rows.iter().all(|&g| g < 0) {
+                continue;
+            }
+            cols.clear();
+            cols.extend(
+                row.iter()
+                    .flat_map(|(c, _)| dofs.global[3 * c..3 * c + 3].iter().copied()),
+            );
+            vals.clear();
+            for i in 0..3 {
+                vals.extend(
+                    row.iter()
+                        .flat_map(|(_, b)| b[3 * i..3 * i + 3].iter().copied()),
+                );
+            }
+            jac.add_values(rows, &cols, &vals)?;
+        }
+        Ok(())
+    }
+
+    /// The summed `3 x 3` block of rows of `row` and columns of `col` (zero if none).
+    #[cfg(test)]
+    fn block(&self, row: usize, col: usize) -> [f64; 9] {
+        self.row_of
+            .get(&row)
+            .and_then(|&r| self.rows[r].1.iter().find(|(c, _)| *c == col))
+            .map_or([0.0; 9], |(_, b)| *b)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::BlockSum;
+
+    /// A dense block over `slots` whose entry (row dof `3 a + i`, column dof `3 b + j`) is
+    /// `f(slots[a], i, slots[b], j)`.
+    fn block(slots: &[usize], f: impl Fn(usize, usize, usize, usize) -> f64) -> Vec<f64> {
+        let n = 3 * slots.len();
+        (0..n * n)
+            .map(|k| {
+                let (r, c) = (k / n, k % n);
+                f(slots[r / 3], r % 3, slots[c / 3], c % 3)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn overlapping_blocks_sum_entry_by_entry() {
+        let entry = |seed: f64| {
+            move |a: usize, i: usize, b: usize, j: usize| {
+                seed * (1.0 + a as f64) + 0.1 * i as f64 - 0.01 * (b * 3 + j) as f64
+            }
+        };
+        // Unsorted slots, overlapping in nodes 7 and 2.
+        let first = [7, 2, 9];
+        let second = [4, 2, 7, 11];
+        let mut sum = BlockSum::default();
+        sum.add(&first, &block(&first, entry(1.0)));
+        sum.add(&second, &block(&second, entry(2.0)));
+        let nodes = [2, 4, 7, 9, 11];
+        for &a in &nodes {
+            for &b in &nodes {
+                let got = sum.block(a, b);
+                for i in 0..3 {
+                    for j in 0..3 {
+                        let mut want = 0.0;
+                        if first.contains(&a) && first.contains(&b) {
+                            want += entry(1.0)(a, i, b, j);
+                        }
+                        if second.contains(&a) && second.contains(&b) {
+                            want += entry(2.0)(a, i, b, j);
+                        }
+                        assert_eq!(got[3 * i + j], want, "rows of {a}, columns of {b}");
+                    }
+                }
+            }
+        }
+        // Every row keeps its columns sorted, each once.
+        for (_, row) in &sum.rows {
+            assert!(row.windows(2).all(|w| w[0].0 < w[1].0));
+        }
+    }
+}
