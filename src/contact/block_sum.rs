@@ -8,8 +8,9 @@
 //! `3 x 3` blocks per node (columns sorted by node, merged with the block's sorted slots), and
 //! [`BlockSum::add_to`] then hands PETSc each node row once, with every column it holds.
 //!
-//! The sums are taken in the order the blocks arrive, entry by entry, so they do not depend on
-//! the number of ranks beyond what PETSc's own assembly adds.
+//! The sums are taken in the order the blocks arrive, entry by entry. Which blocks a rank sums
+//! before PETSc adds them up depends on the number of ranks, so results differ between rank
+//! counts by round-off only.
 
 use std::collections::HashMap;
 
@@ -31,7 +32,8 @@ pub struct BlockSum {
 
 impl BlockSum {
     /// Adds the dense block `tangent` (row-major `3m x 3m`) over the nodes `slots` (`3 slot + c`
-    /// order; a node may appear once only).
+    /// order). A node listed twice (a node-on-segment block over the current and the old face)
+    /// gets both its rows and both its columns summed.
     ///
     /// # Panics
     /// If `tangent` does not hold `(3 slots.len())^2` entries.
@@ -155,5 +157,28 @@ mod tests {
         for (_, row) in &sum.rows {
             assert!(row.windows(2).all(|w| w[0].0 < w[1].0));
         }
+    }
+
+    #[test]
+    fn a_node_listed_twice_gets_both_rows_and_columns() {
+        let slots = [4, 2, 4];
+        let entry = |r: usize, c: usize| (10 * r + c) as f64;
+        let n = 9;
+        let dense: Vec<f64> = (0..n * n).map(|k| entry(k / n, k % n)).collect();
+        let mut sum = BlockSum::default();
+        sum.add(&slots, &dense);
+        // Rows of node 4 are block rows 0 and 2, its columns block columns 0 and 2.
+        let got = sum.block(4, 4);
+        for i in 0..3 {
+            for j in 0..3 {
+                let want: f64 = [0, 2]
+                    .iter()
+                    .flat_map(|&a| [0, 2].map(move |b| entry(3 * a + i, 3 * b + j)))
+                    .sum();
+                assert_eq!(got[3 * i + j], want);
+            }
+        }
+        let got = sum.block(2, 4);
+        assert_eq!(got[0], entry(3, 0) + entry(3, 6));
     }
 }

@@ -89,17 +89,21 @@
 //!
 //! The mesh is replicated and every rank gathers the displacements of every contact surface
 //! node. The contact work is dealt out by traction node, independently of the element
-//! partition, because METIS balances elements, and a partition that cuts across the interface
-//! would leave the whole surface to one rank: the passes of an interface are dealt to blocks of
-//! ranks ([`pass_ranks`]; on two ranks each pass of a two-pass interface goes whole to one
-//! rank), and each pass's nodes are cut into strips of equal counts along the longest side of
-//! the secondary surface, one strip per rank of its block ([`deal_in_strips`]). The rank holding a traction node computes everything of that node, its Uzawa
-//! multipliers and history included: it integrates every face pair whose secondary face carries
-//! a node it holds (faces straddling a cut are thus integrated by both ranks), sums them in a
+//! partition: METIS balances elements, and a partition whose cut does not cross the interface
+//! leaves the whole surface to one rank. The passes of an interface are dealt to blocks of
+//! ranks (`pass_ranks`: on two ranks each pass of a two-pass interface goes whole to one rank),
+//! and each pass's nodes are cut into strips of equal counts along the longest side of the
+//! secondary surface, one strip per rank of its block (`deal_in_strips`).
+//!
+//! The rank holding a traction node computes everything of that node and keeps its Uzawa
+//! multipliers and history: it integrates every face pair whose secondary face carries a node
+//! it holds (faces next to a strip cut are thus integrated by both neighbours; their pair
+//! statistics are counted by the holder of the face's first traction node), sums them in a
 //! canonical order (by secondary face, then primary face), and adds the node's forces and
-//! tangent block into the distributed vector and matrix, whatever ranks own the rows. The
-//! results are therefore independent of the partition up to the summation order of PETSc's
-//! assembly.
+//! tangent block into the distributed vector and matrix, whatever ranks own the rows (the
+//! blocks summed first into node rows, [`BlockSum`]). The results are therefore independent of
+//! the partition up to round-off: the order of PETSc's assembly, and which node blocks a rank
+//! sums before it.
 //!
 //! # Matrix pattern
 //!
@@ -214,13 +218,19 @@ pub struct ContactPass {
     pub nodes: Vec<usize>,
     /// Per secondary face: the index into `nodes` of its k-th traction node.
     carriers: Vec<Vec<usize>>,
-    /// Per traction node.
+    /// Per traction node. The multipliers and history (`history`, `gap_old`, `segment_old`)
+    /// are kept only by the rank holding the node; elsewhere they stay as they started. (The
+    /// node-on-segment pattern reads `segment_old` on every rank: a row owned by another rank
+    /// may then miss the old face's columns, which costs PETSc a reallocation, not an error.)
     pub state: Vec<NodeState>,
     /// Secondary faces that carry a node this rank holds (the faces it integrates).
     local_faces: Vec<usize>,
-    /// The traction nodes whose contact work this rank does (indices into `nodes`; see
-    /// "Parallel layout").
-    owned: Vec<usize>,
+    /// The traction nodes this rank holds: it does their contact work and keeps their
+    /// multipliers and history (indices into `nodes`; see "Parallel layout").
+    held: Vec<usize>,
+    /// Per secondary face: this rank reports the face's pair statistics (it holds the face's
+    /// first traction node), so that a face integrated on two ranks counts once.
+    tallied: Vec<bool>,
     /// Symmetry constraints `(node, axis)` of the secondary surface (for the normals).
     symmetry: Vec<(usize, usize)>,
     /// Mortar or node-on-segment.
@@ -419,7 +429,7 @@ impl ContactInterfaces {
         n
     }
 
-    /// Adds the contact forces of the nodes this rank owns to `f` (not assembled). Returns a
+    /// Adds the contact forces of the nodes this rank holds to `f` (not assembled). Returns a
     /// description of a failure that must cut the step (a degenerate normal), if any.
     pub fn add_residual(
         &self,
@@ -434,7 +444,8 @@ impl ContactInterfaces {
         })
     }
 
-    /// Adds the contact tangent of the nodes this rank owns to `jac` (not assembled).
+    /// Adds the contact tangent of the nodes this rank holds to `jac` (not assembled), their
+    /// blocks summed first into sparse node rows ([`BlockSum`]).
     pub fn add_jacobian(
         &self,
         scene: &Scene,
@@ -451,7 +462,7 @@ impl ContactInterfaces {
         Ok(failure)
     }
 
-    /// Adds the contact forces of the owned nodes at every dof (constrained ones included)
+    /// Adds the contact forces of the held nodes at every dof (constrained ones included)
     /// into `out` (dof-indexed), for reactions.
     pub fn add_nodal_forces(&self, scene: &Scene, u: &[f64], out: &mut [f64]) {
         let _ = self.assemble(scene, u, false, |block| {
@@ -464,7 +475,7 @@ impl ContactInterfaces {
         });
     }
 
-    /// Evaluates every pass and hands each owned node's block to `sink`.
+    /// Evaluates every pass and hands each held node's block to `sink`.
     fn assemble(
         &self,
         scene: &Scene,
@@ -476,12 +487,13 @@ impl ContactInterfaces {
         let timed = &self.timings;
         for iface in &self.interfaces {
             let mut stats = RejectStats::default();
-            for pass in &iface.passes {
+            // A pass this rank holds no node of costs it nothing (not even its normals).
+            for pass in iface.passes.iter().filter(|p| !p.held.is_empty()) {
                 let ctx = iface.context(self.stick_all.get(), &x, &self.x_old);
                 if pass.method == ContactMethod::NodeOnSegment {
                     let tree = timed.search.time(|| pass.primary_tree(&x));
                     let failed = timed.assembly.time(|| -> Result<bool> {
-                        for &a in &pass.owned {
+                        for &a in &pass.held {
                             let (block, _) = pass.nts_node(&ctx, &tree, a, tangent);
                             if let Some(block) = block {
                                 if block.force.iter().any(|v| !v.is_finite()) {
@@ -522,7 +534,7 @@ impl ContactInterfaces {
                     )));
                 }
                 timed.assembly.time(|| -> Result<()> {
-                    let by_node = pass.pairs_by_node(&pairs, &pass.owned);
+                    let by_node = pass.pairs_by_node(&pairs, &pass.held);
                     for (&a, terms) in &by_node {
                         let (block, _) = pass.node_block(&ctx, &normals, a, terms, tangent);
                         if let Some(block) = block {
@@ -537,7 +549,7 @@ impl ContactInterfaces {
         Ok(None)
     }
 
-    /// Fields of every traction node of one pass at displacements `u`, on every rank (owners
+    /// Fields of every traction node of one pass at displacements `u`, on every rank (holders
     /// compute, all sum).
     pub fn pass_fields(
         &self,
@@ -577,7 +589,7 @@ impl ContactInterfaces {
             .collect()
     }
 
-    /// Fields of the owned traction nodes of one pass, `(index into nodes, fields)`.
+    /// Fields of the held traction nodes of one pass, `(index into nodes, fields)`.
     fn local_fields(
         &self,
         scene: &Scene,
@@ -589,10 +601,13 @@ impl ContactInterfaces {
         let p = &iface.passes[pass];
         let x = current_positions(scene, u);
         let ctx = iface.context(self.stick_all.get(), &x, &self.x_old);
+        if p.held.is_empty() {
+            return Vec::new();
+        }
         if p.method == ContactMethod::NodeOnSegment {
             let tree = p.primary_tree(&x);
             return p
-                .owned
+                .held
                 .iter()
                 .map(|&a| (a, p.nts_node(&ctx, &tree, a, false).1))
                 .collect();
@@ -603,8 +618,8 @@ impl ContactInterfaces {
         let mut stats = RejectStats::default();
         let candidates = p.candidates(&x, &p.local_faces, EVAL_MARGIN);
         let pairs = p.integrate(&ctx, candidates, false, &mut stats);
-        let by_node = p.pairs_by_node(&pairs, &p.owned);
-        p.owned
+        let by_node = p.pairs_by_node(&pairs, &p.held);
+        p.held
             .iter()
             .map(|&a| {
                 let fields = match by_node.get(&a) {
@@ -723,7 +738,7 @@ impl ContactInterfaces {
 
     /// One Uzawa step (collective): every interface whose largest violation exceeds its
     /// tolerances and that has augmentations left (`done < uzawa_max`) updates the
-    /// multipliers of its owned nodes. Returns what happened and the largest violation, as a
+    /// multipliers of its held nodes. Returns what happened and the largest violation, as a
     /// multiple of its tolerance (at most 1 when met).
     pub fn augment(
         &mut self,
@@ -763,7 +778,7 @@ impl ContactInterfaces {
         (result, worst)
     }
 
-    /// The Uzawa update of every owned node of interface `i`: `(pass, node, violation as a
+    /// The Uzawa update of every held node of interface `i`: `(pass, node, violation as a
     /// multiple of its tolerance, new history)`.
     fn uzawa_updates(
         &self,
@@ -808,7 +823,7 @@ impl ContactInterfaces {
     }
 
     /// Closes a converged step: the tangential tractions, normals and weighted gaps of the
-    /// owned nodes become the history of the next step; `u` becomes the old displacement.
+    /// held nodes become the history of the next step; `u` becomes the old displacement.
     pub fn commit(&mut self, scene: &Scene, u: &[f64]) {
         for i in 0..self.interfaces.len() {
             let mu = self.interfaces[i].mu;
@@ -947,15 +962,19 @@ impl ContactPass {
             })
             .collect();
         let points: Vec<[f64; 3]> = nodes.iter().map(|&n| mesh.coords[n]).collect();
-        let contact_owner: Vec<usize> = deal_in_strips(&points, workers.len())
+        let holder: Vec<usize> = deal_in_strips(&points, workers.len())
             .into_iter()
             .map(|strip| workers.start + strip)
             .collect();
-        let owned: Vec<usize> = (0..nodes.len())
-            .filter(|&a| contact_owner[a] == dofs.rank)
+        let held: Vec<usize> = (0..nodes.len())
+            .filter(|&a| holder[a] == dofs.rank)
             .collect();
         let local_faces: Vec<usize> = (0..sec_faces.len())
-            .filter(|&s| carriers[s].iter().any(|&a| contact_owner[a] == dofs.rank))
+            .filter(|&s| carriers[s].iter().any(|&a| holder[a] == dofs.rank))
+            .collect();
+        let tallied = carriers
+            .iter()
+            .map(|c| c.first().is_some_and(|&a| holder[a] == dofs.rank))
             .collect();
         let surface: std::collections::BTreeSet<usize> = sec_faces
             .iter()
@@ -975,7 +994,8 @@ impl ContactPass {
             carriers,
             state,
             local_faces,
-            owned,
+            held,
+            tallied,
             symmetry,
             method: iface.method,
         })
@@ -1170,7 +1190,8 @@ impl ContactPass {
     }
 
     /// Integrates every candidate pair (secondary face, its candidate primary faces; see
-    /// [`ContactPass::candidates`]), in canonical order.
+    /// [`ContactPass::candidates`]), in canonical order; the pair statistics of the faces this
+    /// rank tallies go to `stats` (non-finite values from every face).
     fn integrate(
         &self,
         ctx: &EvalContext,
@@ -1199,11 +1220,19 @@ impl ContactPass {
                         x: &px,
                     },
                 );
+                let mut face_stats = RejectStats::default();
                 let w = if tangent {
-                    integrate_pair_linearized(&sg, &pg, &opts, stats)
+                    integrate_pair_linearized(&sg, &pg, &opts, &mut face_stats)
                 } else {
-                    dense_values(&integrate_pair(&sg, &pg, &opts, stats), sf, pf, ctx.scheme)
+                    let values = integrate_pair(&sg, &pg, &opts, &mut face_stats);
+                    dense_values(&values, sf, pf, ctx.scheme)
                 };
+                if self.tallied[s] {
+                    stats.add(&face_stats);
+                } else {
+                    // Counted by the rank that tallies the face; a failure still counts here.
+                    stats.non_finite += face_stats.non_finite;
+                }
                 if w.area > 0.0 {
                     out.push(PairData { s, m, w });
                 }
@@ -1673,11 +1702,12 @@ fn pass_ranks(pass: usize, passes: usize, ranks: usize) -> std::ops::Range<usize
     }
 }
 
-/// The strip (of `strips`) that does the contact work of each traction node: the nodes, sorted along the
-/// longest side of their bounding box (reference positions; ties by index), cut into `strips`
-/// strips of equal counts. Independent of the element partition on purpose: METIS balances
-/// elements, and a partition that cuts across the interface leaves a whole contact surface to
-/// one rank. The face row straddling each cut is integrated by both neighbours.
+/// The strip (of `strips`) that does the contact work of each traction node: the nodes, sorted
+/// along the longest side of their bounding box (reference positions; ties by index), cut into
+/// `strips` strips of equal counts. The faces next to each cut (one row of faces, or two when
+/// the cut falls inside a row of nodes) are integrated by both neighbours. Equal counts are
+/// equal work when the whole surface is in contact; a contact zone smaller than the surface
+/// may fall in one strip.
 fn deal_in_strips(points: &[[f64; 3]], strips: usize) -> Vec<usize> {
     let axis = (0..3)
         .max_by(|&i, &j| {
