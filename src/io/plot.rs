@@ -7,7 +7,7 @@
 //! without any text (no title, labels, tick values or legend), and [`loglog`] and [`lines`]
 //! return a warning saying so.
 //!
-//! Log axes have ticks of our own ([`LogAxis`]): plotters' log scale only labels powers of ten,
+//! Log axes have ticks of our own (`LogAxis`): plotters' log scale only labels powers of ten,
 //! which leaves a convergence study within one decade of h without a single tick. Ticks are taken
 //! from the sparsest of the mantissa sets {1}, {1, 2, 5}, {1, ..., 9}, {1, 1.5, ..., 9.5} (times
 //! powers of ten) that gives at least three labels in the range (four within a decade); the light

@@ -8,13 +8,13 @@
 //! size doubles back toward the nominal one. Every cut is reported on rank 0 and counted in the
 //! history and summary. When a run fails, every output describes the last converged step.
 //!
-//! With frictional contact, a solve gets [`FULL_STEP_ITERATIONS`] full Newton steps first; if
+//! With frictional contact, a solve gets `FULL_STEP_ITERATIONS` full Newton steps first; if
 //! they do not converge (a node's open, stick or slip state cycling), the solve is redone from
-//! the same start with the [`FALLBACK_LINE_SEARCH`] before the step is cut. The step's Newton
+//! the same start with the `FALLBACK_LINE_SEARCH` before the step is cut. The step's Newton
 //! count includes the failed attempt; the redone solves are counted in the summary
 //! (`line_search_fallbacks`) and named in the progress line.
 //!
-//! Each step's Newton starts from the consistent predictor ([`Predictor`], `steps.predictor`):
+//! Each step's Newton starts from the consistent predictor (`Predictor`, `steps.predictor`):
 //! measured, it halves the Newton iterations of displacement-driven steps and removes the cuts
 //! that a large prescribed increment otherwise causes.
 //!
