@@ -1784,6 +1784,37 @@ mod tests {
     }
 
     #[test]
+    fn every_node_is_held_by_exactly_one_rank() {
+        let points: Vec<[f64; 3]> = (0..23)
+            .map(|i| [(i % 5) as f64 * 0.3, (i / 5) as f64, 0.5 * (i % 2) as f64])
+            .collect();
+        for ranks in 1..=5 {
+            for passes in 1..=2 {
+                let mut held_by_pass = vec![0usize; passes];
+                for (pass, held) in held_by_pass.iter_mut().enumerate() {
+                    let workers = pass_ranks(pass, passes, ranks);
+                    assert!(!workers.is_empty() && workers.end <= ranks);
+                    let strips = deal_in_strips(&points, workers.len());
+                    let mut counts = vec![0usize; workers.len()];
+                    for &s in &strips {
+                        counts[s] += 1;
+                    }
+                    let (lo, hi) = (counts.iter().min(), counts.iter().max());
+                    assert!(hi.unwrap() - lo.unwrap() <= 1, "{ranks} ranks: {counts:?}");
+                    *held += counts.iter().sum::<usize>();
+                }
+                assert!(held_by_pass.iter().all(|&n| n == points.len()));
+                // Every rank gets a share of some pass.
+                let used: std::collections::BTreeSet<usize> = (0..passes)
+                    .flat_map(|p| pass_ranks(p, passes, ranks))
+                    .collect();
+                assert_eq!(used.len(), ranks);
+            }
+        }
+        assert!(deal_in_strips(&[], 3).is_empty());
+    }
+
+    #[test]
     fn strips_split_along_the_longest_side_in_equal_counts() {
         // A 5 x 3 grid of points, longer along y: two ranks take the lower and upper rows.
         let points: Vec<[f64; 3]> = (0..15)
