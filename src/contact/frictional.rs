@@ -599,11 +599,11 @@ impl ContactInterfaces {
     ) -> Vec<(usize, NodeFields)> {
         let iface = &self.interfaces[interface];
         let p = &iface.passes[pass];
-        let x = current_positions(scene, u);
-        let ctx = iface.context(self.stick_all.get(), &x, &self.x_old);
         if p.held.is_empty() {
             return Vec::new();
         }
+        let x = current_positions(scene, u);
+        let ctx = iface.context(self.stick_all.get(), &x, &self.x_old);
         if p.method == ContactMethod::NodeOnSegment {
             let tree = p.primary_tree(&x);
             return p
@@ -1724,11 +1724,11 @@ fn deal_in_strips(points: &[[f64; 3]], strips: usize) -> Vec<usize> {
         .unwrap_or(0);
     let mut order: Vec<usize> = (0..points.len()).collect();
     order.sort_by(|&a, &b| points[a][axis].total_cmp(&points[b][axis]).then(a.cmp(&b)));
-    let mut owner = vec![0; points.len()];
+    let mut strip = vec![0; points.len()];
     for (position, &a) in order.iter().enumerate() {
-        owner[a] = position * strips / points.len();
+        strip[a] = position * strips / points.len();
     }
-    owner
+    strip
 }
 
 /// Current positions `X + u` of every node.
