@@ -1709,18 +1709,17 @@ fn pass_ranks(pass: usize, passes: usize, ranks: usize) -> std::ops::Range<usize
 /// equal work when the whole surface is in contact; a contact zone smaller than the surface
 /// may fall in one strip.
 fn deal_in_strips(points: &[[f64; 3]], strips: usize) -> Vec<usize> {
+    let extent: [f64; 3] = std::array::from_fn(|c| {
+        let (lo, hi) = points
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |b, p| {
+                (b.0.min(p[c]), b.1.max(p[c]))
+            });
+        hi - lo
+    });
+    // The longest side; the first axis of equally long ones.
     let axis = (0..3)
-        .max_by(|&i, &j| {
-            let extent = |c: usize| {
-                let (lo, hi) = points
-                    .iter()
-                    .fold((f64::INFINITY, f64::NEG_INFINITY), |b, p| {
-                        (b.0.min(p[c]), b.1.max(p[c]))
-                    });
-                hi - lo
-            };
-            extent(i).total_cmp(&extent(j)).then(j.cmp(&i))
-        })
+        .max_by(|&i, &j| extent[i].total_cmp(&extent[j]).then(j.cmp(&i)))
         .unwrap_or(0);
     let mut order: Vec<usize> = (0..points.len()).collect();
     order.sort_by(|&a, &b| points[a][axis].total_cmp(&points[b][axis]).then(a.cmp(&b)));
