@@ -123,8 +123,8 @@ use mpi::topology::SimpleCommunicator;
 use crate::case::{ContactMethod, Interface, InterfaceKind, Scene};
 use crate::contact::block_sum::BlockSum;
 use crate::contact::law::{
-    friction_traction, normal_pressure_touching, uzawa_update, FrictionResult, LawParams,
-    NodeHistory, Status,
+    carries_friction, friction_traction, normal_pressure_touching, touching_friction, uzawa_update,
+    FrictionResult, LawParams, NodeHistory, Status,
 };
 use crate::contact::mortar::{
     integrate_pair, integrate_pair_linearized, sub_segments, traction_node_count, traction_nodes,
@@ -1349,7 +1349,10 @@ impl ContactPass {
             }
             _ => [0.0; 3],
         };
-        let fr = if ctx.iface_mu > 0.0 && p > 0.0 {
+        let touching = dp_dgh > 0.0 && !carries_friction(p, prm.eps_n, TOUCH_TOLERANCE * st.h);
+        let fr = if ctx.iface_mu > 0.0 && touching {
+            touching_friction(nu, &prm)
+        } else if ctx.iface_mu > 0.0 && p > 0.0 {
             let law = if ctx.stick_all {
                 LawParams {
                     mu: f64::INFINITY,

@@ -214,6 +214,41 @@ pub fn normal_pressure_touching(lambda_n: f64, eps_n: f64, gh: f64, touch: f64) 
     }
 }
 
+/// True when a pressure `p` from [`normal_pressure_touching`] carries friction: `p` above what
+/// a penetration of the touching band gives (`eps_n touch`). Below it, a pressed or touching
+/// node takes [`touching_friction`].
+///
+/// Surfaces that start in contact touch to round-off: their weighted gaps are `+-1e-16`, and
+/// a round-off penetration gives a round-off pressure. With the Coulomb law on that pressure,
+/// the first tangent took a stick or a slip state per node, and a slip direction, from the last
+/// bits of the gaps: a change of summation order or of quadrature rule decided whether the
+/// first step of the two-layer cantilever (`cases/bending`) converged.
+pub fn carries_friction(p: f64, eps_n: f64, touch: f64) -> bool {
+    p > eps_n * touch
+}
+
+/// The friction of a node inside the touching band (see [`carries_friction`]): no tangential
+/// traction, and the tangent of sticking, `d t_T / d dsh = eps_t (I - nu nu)`.
+///
+/// This is the tangential twin of the band's closed normal derivative
+/// ([`normal_pressure_touching`]): touching surfaces hold each other in the first Newton
+/// iteration, tangentially as well as normally, whatever the round-off of their gaps. At
+/// `p = 0` and `dsh = 0` the stick derivative is a limit of the law's derivatives in its stick
+/// region, so it is a valid generalized derivative; the traction left out is at most
+/// `mu eps_n touch` (`1e-8 mu E` with the default penalty). The status is [`Status::Open`]:
+/// the node carries no traction, and it has no slip to enforce in the Uzawa loop.
+///
+/// # Panics
+/// If `nu` is zero.
+pub fn touching_friction(nu: [f64; 3], prm: &LawParams) -> FrictionResult {
+    let (n, _) = unit(nu);
+    let d_dsh = (Matrix3::identity() - n * n.transpose()) * prm.eps_t;
+    FrictionResult {
+        d_dsh: to_rows(&d_dsh),
+        ..FrictionResult::zero(Status::Open)
+    }
+}
+
 /// Euclidean norm with scaling: no underflow for tiny components, no overflow for huge ones.
 fn norm3(v: &Vector3<f64>) -> f64 {
     let s = v.amax();
@@ -466,6 +501,45 @@ mod tests {
 
     fn v3(a: [f64; 3]) -> Vector3<f64> {
         Vector3::from(a)
+    }
+
+    #[test]
+    fn friction_starts_above_the_touching_band() {
+        let (eps, touch) = (1e5, 1e-10);
+        // A round-off penetration inside the band: touching, no friction.
+        let (p, dp) = normal_pressure_touching(0.0, eps, 0.5 * touch, touch);
+        assert!(p > 0.0 && dp == eps);
+        assert!(!carries_friction(p, eps, touch));
+        // Just beyond the band, or held by a multiplier: friction.
+        let (p, _) = normal_pressure_touching(0.0, eps, 2.0 * touch, touch);
+        assert!(carries_friction(p, eps, touch));
+        let (p, _) = normal_pressure_touching(1.0, eps, 0.0, touch);
+        assert!(carries_friction(p, eps, touch));
+        // Open: none.
+        assert!(!carries_friction(0.0, eps, touch));
+    }
+
+    #[test]
+    fn touching_friction_is_the_stick_tangent_without_traction() {
+        let prm = LawParams {
+            eps_n: 1e5,
+            eps_t: 300.0,
+            mu: 0.3,
+        };
+        let nu = [0.0, 0.6, 0.8];
+        let t = touching_friction([0.0, 1.2, 1.6], &prm);
+        assert_eq!(t.traction, [0.0; 3]);
+        assert_eq!(t.status, Status::Open);
+        assert_eq!((t.d_p, t.d_nu), ([0.0; 3], [[0.0; 3]; 3]));
+        // The law's own stick derivative at a small slip: the same matrix.
+        let h = NodeHistory::default();
+        let stick = friction_traction(&h, &prm, nu, 1.0, [1e-9, 0.0, 0.0]);
+        assert_eq!(stick.status, Status::Stick);
+        for i in 0..3 {
+            for j in 0..3 {
+                assert!((t.d_dsh[i][j] - stick.d_dsh[i][j]).abs() < 1e-12, "{i} {j}");
+            }
+        }
     }
 
     fn nrm(a: [f64; 3]) -> f64 {

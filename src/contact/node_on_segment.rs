@@ -37,7 +37,8 @@
 use num_dual::DualSVec64;
 
 use crate::contact::law::{
-    friction_traction, normal_pressure_touching, FrictionResult, LawParams, NodeHistory,
+    carries_friction, friction_traction, normal_pressure_touching, touching_friction,
+    FrictionResult, LawParams, NodeHistory,
 };
 use crate::fe::shape::{face_normal_at, face_point_at, face_tangents_at, Scalar};
 use crate::fe::FaceType;
@@ -252,7 +253,10 @@ pub fn node_contribution(
     let nu_re = nu.map(|v| v.re);
     let (p, dp_dgh) =
         normal_pressure_touching(law.history.lambda_n, law.params.eps_n, gh.re, law.touch);
-    let friction = if law.params.mu > 0.0 && p > 0.0 {
+    let touching = dp_dgh > 0.0 && !carries_friction(p, law.params.eps_n, law.touch);
+    let friction = if law.params.mu > 0.0 && touching {
+        touching_friction(nu_re, &law.params)
+    } else if law.params.mu > 0.0 && p > 0.0 {
         let prm = if law.stick_all {
             LawParams {
                 mu: f64::INFINITY,

@@ -328,7 +328,8 @@ pub struct InterfaceSpec {
     /// are a penalty method. One pass: 50 tied, 10 contact.
     pub uzawa_max: Option<usize>,
     /// Degree of the triangle rule on each integration pallet. Default 8 for quadratic faces,
-    /// 4 for linear ones.
+    /// 4 for linear ones. Up to degree 8 the rules are Dunavant's symmetric ones (6, 7, 12 and
+    /// 16 points for degrees 4, 5, 6 and 8; `fe::quadrature`), collapsed Gauss above.
     pub quadrature_degree: Option<usize>,
     /// Contact: Coulomb friction coefficient mu >= 0. Default 0: frictionless, and then no
     /// friction work is done at all (no slip, no return map).
