@@ -69,9 +69,8 @@
 //! After a converged Newton solve, each node's multipliers are updated (law::uzawa_update);
 //! the violation of a node, relative to `h_A`, is the size of the normal update in gap units,
 //! `|d lambda_N| / eps_N` (the penetration of a pressed node, the multiplier an open node still
-//! holds) weighted by the node's coverage `a_A / a_full_A` (`normal_violation`), and the slip
-//! `|dsh_A|` of a sticking node (ALGORITHM.md section 4; a slipping node has no tangential
-//! constraint to meet). Solves repeat while a penetration is above `uzawa_tol`
+//! holds), and the slip `|dsh_A|` of a sticking node (ALGORITHM.md section 4; a slipping node has
+//! no tangential constraint to meet). Solves repeat while a penetration is above `uzawa_tol`
 //! or a slip above `uzawa_slip_tol` (both relative to `h_A`; the slip tolerance is looser
 //! because with the soft default tangential penalty each update removes only part of a
 //! sticking node's slip), at most `uzawa_max` times per step. With
@@ -807,14 +806,10 @@ impl ContactInterfaces {
                         ..st.history
                     }
                 };
-                // Normal: see `normal_violation`. Tangential: the slip of a sticking node (a
-                // slipping node has no slip constraint).
-                let dn = normal_violation(
-                    new.lambda_n - st.history.lambda_n,
-                    prm.eps_n,
-                    f.area,
-                    st.a_full,
-                );
+                // Normal: the size of the multiplier update in gap units (the penetration of a
+                // pressed node, the released multiplier of an open one). Tangential: the slip of
+                // a sticking node (a slipping node has no slip constraint).
+                let dn = (new.lambda_n - st.history.lambda_n).abs() / prm.eps_n;
                 let dt = if iface.mu > 0.0 && f.status == 1 {
                     norm(&f.slip)
                 } else {
@@ -891,23 +886,6 @@ impl ContactInterfaces {
     pub fn rank(&self) -> usize {
         self.rank
     }
-}
-
-/// The normal violation of a node after a converged solve, in gap units: the size of its
-/// multiplier update `|d lambda_N| / eps_N` (the penetration `gh_A` of a pressed node, the
-/// multiplier an open node still holds), weighted by the node's coverage `a_A / a_full_A`
-/// (at most 1).
-///
-/// `gh_A` is the mean gap over the covered part of the node's support; weighted by the
-/// coverage it is the weighted gap `nu . g_A` of the paper's eq. 3 per full nodal integral,
-/// which goes to zero continuously as a node slides off the edge of the primary surface, where
-/// [`MIN_COVERAGE`] drops it. Unweighted, a node covered by a sliver (the corner of the upper
-/// cube on the lower node in case 4 of the sliding blocks: 1-6 %) had to meet the full
-/// tolerance while its force `a_A p_A` could hardly move the surfaces: the Uzawa loop stalled
-/// there at the cap, with the multiplier at 25 times the mean pressure.
-fn normal_violation(lambda_change: f64, eps_n: f64, area: f64, a_full: f64) -> f64 {
-    let coverage = (area / a_full).min(1.0);
-    coverage * lambda_change.abs() / eps_n
 }
 
 /// What one evaluation of a pass needs besides the pass.
@@ -1790,23 +1768,7 @@ fn tangential(v: [f64; 3], nu: [f64; 3]) -> [f64; 3] {
 
 #[cfg(test)]
 mod tests {
-    use super::{deal_in_strips, normal_violation, pass_ranks, MIN_COVERAGE};
-
-    #[test]
-    fn normal_violation_is_the_penetration_weighted_by_coverage() {
-        let (eps, a_full) = (200.0, 0.25);
-        // Fully covered: the multiplier update in gap units (here 2e-3), either sign.
-        assert_eq!(normal_violation(0.4, eps, a_full, a_full), 2e-3);
-        assert_eq!(normal_violation(-0.4, eps, a_full, a_full), 2e-3);
-        // Covered a tenth: a tenth of it.
-        let tenth = normal_violation(0.4, eps, 0.1 * a_full, a_full);
-        assert!((tenth - 2e-4).abs() < 1e-18, "{tenth}");
-        // An overlap integral above the full one (curved faces, round-off) counts as full.
-        assert_eq!(normal_violation(0.4, eps, 1.01 * a_full, a_full), 2e-3);
-        // Continuous down to where MIN_COVERAGE drops the node.
-        let edge = normal_violation(0.4, eps, MIN_COVERAGE * a_full, a_full);
-        assert!((edge - 2e-3 * MIN_COVERAGE).abs() < 1e-18, "{edge}");
-    }
+    use super::{deal_in_strips, pass_ranks};
 
     #[test]
     fn passes_are_dealt_before_strips() {

@@ -308,9 +308,7 @@ pub struct InterfaceSpec {
     pub penalty: Option<f64>,
     /// Uzawa augmentations stop when every violation is below this fraction of h_A. Tied: the
     /// gap |g_A| / a_A; default 1e-12 (the tied patch test holds to 1e-10). Contact: the
-    /// penetration gh_A of every pressed node times its coverage a_A / a_full_A (at most 1:
-    /// the weighted gap per full nodal integral, which fades as a node slides off the primary
-    /// surface); default 1e-6.
+    /// penetration gh_A of every pressed node; default 1e-6.
     pub uzawa_tol: Option<f64>,
     /// Contact with friction: augmentations also go on while the slip |dsh_A| of a sticking
     /// node is above this fraction of h_A. Default 1e-3, from the Pareto front of
