@@ -199,7 +199,7 @@ pub struct NodeFields {
     pub traction_t: [f64; 3],
     /// Unit nodal normal.
     pub normal: [f64; 3],
-    /// 0 open (or no overlap), 1 stick, 2 slip.
+    /// 0 open (no overlap, open, or inside the touching band), 1 stick, 2 slip.
     pub status: u8,
     /// The weighted gap vector `g_A` (zero without overlap; not in `pass_fields`).
     pub weighted_gap: [f64; 3],

@@ -139,7 +139,8 @@ pub struct NodeHistory {
 /// Status of a node under the Coulomb law.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Status {
-    /// `p = 0`: no traction.
+    /// `p = 0`, or a node inside the touching band ([`touching_friction`]): no tangential
+    /// traction.
     Open,
     /// `|t_tr| <= mu p`: `t_T = t_tr`.
     Stick,
@@ -232,11 +233,15 @@ pub fn carries_friction(p: f64, eps_n: f64, touch: f64) -> bool {
 ///
 /// This is the tangential twin of the band's closed normal derivative
 /// ([`normal_pressure_touching`]): touching surfaces hold each other in the first Newton
-/// iteration, tangentially as well as normally, whatever the round-off of their gaps. At
-/// `p = 0` and `dsh = 0` the stick derivative is a limit of the law's derivatives in its stick
-/// region, so it is a valid generalized derivative; the traction left out is at most
-/// `mu eps_n touch` (`1e-8 mu E` with the default penalty). The status is [`Status::Open`]:
-/// the node carries no traction, and it has no slip to enforce in the Uzawa loop.
+/// iteration, tangentially as well as normally, whatever the round-off of their gaps. Where
+/// surfaces first touch (no slip, no carried traction) the stick derivative is a limit of the
+/// law's derivatives in its stick region, so a valid generalized derivative. Elsewhere in the
+/// band (a node unloading through it, with slip or history) it is not the derivative of the
+/// residual, whose tangential traction is zero: Newton may lose a quadratic step there, on a
+/// band `1e-10 h` thick. The Coulomb traction left out is at most `mu eps_n touch`
+/// (`1e-8 mu E` with the default penalty); with the stick predictor (`mu = infinity`) the
+/// band carries no stick traction either. The status is [`Status::Open`]: the node carries no
+/// tangential traction and has no slip to enforce in the Uzawa loop.
 ///
 /// # Panics
 /// If `nu` is zero.

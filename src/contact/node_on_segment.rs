@@ -381,7 +381,9 @@ fn node_tangent(
     let d_nu: Vec<Vec<f64>> = nu.iter().map(|v| pad(grad(v))).collect();
     let d_p: Vec<f64> = pad(grad(gh)).iter().map(|g| c.dp_dgh * g).collect();
     let fr = &c.friction;
-    let friction = law.params.mu > 0.0 && c.pressure > 0.0;
+    // Inside the touching band (p = 0 or a round-off p) the law gave the stick tangent
+    // (`touching_friction`); elsewhere a frictionless or open result has zero derivatives.
+    let friction = law.params.mu > 0.0;
     let t: [f64; 3] = std::array::from_fn(|k| c.pressure * c.nu[k] + fr.traction[k]);
     let mut dt = vec![vec![0.0; l]; 3];
     for (k, row) in dt.iter_mut().enumerate() {
@@ -466,6 +468,66 @@ mod tests {
 
     /// The tangent against central differences of the forces, in stick and in slip, on a
     /// warped primary segment (old segment = a different face).
+    /// A node inside the touching band, on either side of the surface: no tangential force,
+    /// and the stick stiffness `area eps_t` in its tangential rows (the round-off sign of the
+    /// gap must not decide the tangent).
+    #[test]
+    fn touching_band_gives_the_stick_tangent_on_both_sides() {
+        let flat = vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+        ];
+        let history = NodeHistory::default();
+        let law = NodeLaw {
+            history: &history,
+            params: LawParams {
+                eps_n: 1000.0,
+                eps_t: 300.0,
+                mu: 0.3,
+            },
+            touch: 1e-3,
+            area: 0.25,
+            stick_all: false,
+        };
+        for z in [0.5e-3, -0.5e-3] {
+            let node = [0.4, 0.6, z];
+            let segment = Segment {
+                kind: FaceType::Quad4,
+                x: &flat,
+            };
+            let projection = project(&segment, node).unwrap();
+            // Slip is measured from the old closest point: the node's own (no slip yet).
+            let old = Segment {
+                kind: FaceType::Quad4,
+                x: &flat,
+            };
+            let geo = NodeGeometry {
+                x_node: node,
+                segment,
+                projection,
+                old: Some((old, projection.xi)),
+            };
+            let c = node_contribution(&geo, &law, true).unwrap();
+            assert!(c.dp_dgh > 0.0, "z = {z}: not in the band");
+            assert!(
+                c.pressure <= law.params.eps_n * law.touch,
+                "z = {z}: {}",
+                c.pressure
+            );
+            assert_eq!(c.friction.traction, [0.0; 3], "z = {z}");
+            let l = c.force.len();
+            for k in 0..2 {
+                let stiffness = c.tangent[k * l + k];
+                assert!(
+                    (stiffness - law.area * law.params.eps_t).abs() < 1e-9,
+                    "z = {z}, axis {k}: {stiffness}"
+                );
+            }
+        }
+    }
+
     #[test]
     fn tangent_matches_central_differences() {
         for (mu, old_t, what) in [

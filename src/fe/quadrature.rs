@@ -38,6 +38,11 @@
 //! it exactly. The weights are products of positive Gauss weights and the Jacobian, positive at the
 //! interior Gauss points. The triangle is the 2D analogue: `xi = u`, `eta = (1 - u) v`,
 //! `d(xi, eta) = (1 - u) du dv`, with `ceil((degree + 2) / 2)` and `ceil((degree + 1) / 2)` points.
+//!
+//! Triangles of degree 3 to 8 (the mortar pallets' range) use Dunavant's symmetric rules
+//! instead, with positive weights and interior points (`tri_dunavant_rule`): 6, 6, 7, 12, 16 and
+//! 16 points where the collapsed rule takes 6, 9, 12, 16, 20 and 25. Collapsed rules serve
+//! tetrahedra of degree 3 and up and triangles of degree 9 and up.
 
 use super::element::{ElementType, FaceType};
 
@@ -238,7 +243,8 @@ enum Orbit {
 
 /// Dunavant's symmetric rules on the unit triangle (D. A. Dunavant, "High degree efficient
 /// symmetrical Gaussian quadrature rules for the triangle", IJNME 21, 1985, rules 4, 5, 6 and
-/// 8): every weight positive and every point inside, fewer points than collapsed Gauss.
+/// 8): every weight positive and every point inside, and fewer points than collapsed Gauss
+/// from degree 4 on.
 /// Degree 3 takes the degree-4 rule (Dunavant's degree-3 rule has a negative weight) and
 /// degree 7 the degree-8 rule (likewise). The digits are the published ones refined by Newton's
 /// method on the moment equations in 40-digit arithmetic (every monomial of the rule's degree
@@ -372,8 +378,8 @@ impl ElementType {
 impl FaceType {
     /// A rule exact for polynomials of total degree <= `degree` on the parent face (quads: tensor
     /// Gauss; triangles: 1-point for degree <= 1, symmetric 3-point for degree 2, Dunavant's
-    /// symmetric rules for degrees 3-8 ([`tri_dunavant_rule`]: 6, 6, 7, 12, 16 and 16 points
-    /// where collapsed Gauss takes 9, 9, 16, 16, 25 and 25), collapsed Gauss above).
+    /// symmetric rules for degrees 3-8 (`tri_dunavant_rule`: 6, 6, 7, 12, 16 and 16 points
+    /// where collapsed Gauss takes 6, 9, 12, 16, 20 and 25), collapsed Gauss above).
     pub fn quadrature(self, degree: usize) -> Rule2 {
         if self.is_quad() {
             return quad_tensor_rule(degree);

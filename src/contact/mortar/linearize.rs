@@ -90,9 +90,9 @@
 //! checks it on generic pairs of every face type and scheme and on pairs of the bending scene.
 //! (The first reason has since lost its force: a node inside the touching band takes the stick
 //! tangent without traction, `contact::law::touching_friction`, so the round-off signs of
-//! touching gaps no longer pick friction states. Measured: with Dunavant's pallet rules in place of collapsed
-//! Gauss, which change the weights at round-off, the bending scene's first step took 28
-//! iterations and 6 cuts before that change and 2 iterations after it.)
+//! touching gaps no longer pick friction states. Measured: with Dunavant's pallet rules in
+//! place of collapsed Gauss, which change the weights at round-off, the two-pass bending
+//! scene's first step took 28 iterations and 6 cuts before that change and 2 after it.)
 //!
 //! # Degenerate configurations
 //!
@@ -124,7 +124,8 @@
 //!
 //! Against the dual-number formulation of level 2 (`dual_reference`): values bit for bit,
 //! derivatives to 1e-13 of the largest (measured: bit for bit as well, over 6 489 pairs of the
-//! bending scene and 2.0e6 numbers of generic pairs; the test asks for less). Against [`super::integrate_pair`] for all 25 face-type pairs and every valid scheme on tilted,
+//! bending scene and 2.0e6 numbers of generic pairs; the test asks for less). Against
+//! [`super::integrate_pair`] for all 25 face-type pairs and every valid scheme on tilted,
 //! curved, perturbed, partially overlapping faces: the values (1e-13 of the largest weight) and
 //! the derivatives against central finite differences; the momentum identity
 //! `sum_b dn1_kb = sum_c dn2_kc`; frame indifference (zero derivative along rigid translations
