@@ -114,7 +114,9 @@
 //! grows. A pair that still falls outside the pattern inside a step costs PETSc a reallocation,
 //! not an error.
 
+use std::cell::RefCell;
 use std::collections::BTreeMap;
+use std::rc::Rc;
 
 use mpi::collective::{CommunicatorCollectives, SystemOperation};
 use mpi::topology::SimpleCommunicator;
@@ -235,6 +237,20 @@ pub struct ContactPass {
     symmetry: Vec<(usize, usize)>,
     /// Mortar or node-on-segment.
     method: ContactMethod,
+    /// Every node of the pass's faces, ascending: their positions key `last_values`.
+    surface_nodes: Vec<usize>,
+    /// The last values-only integration ([`ContactPass::values_at`]).
+    last_values: RefCell<Option<ValuesAt>>,
+}
+
+/// The values-only pairs of a pass at one set of positions, with their statistics.
+#[derive(Clone, Debug)]
+struct ValuesAt {
+    /// Positions of the pass's `surface_nodes`, as bits (so that `-0.0` and NaN compare as
+    /// what they are).
+    positions: Vec<[u64; 3]>,
+    pairs: Rc<Vec<PairData>>,
+    stats: RejectStats,
 }
 
 /// A face's type and global nodes.
@@ -313,6 +329,7 @@ pub struct Saved {
 }
 
 /// The weights of one face pair of one evaluation.
+#[derive(Clone, Debug)]
 struct PairData {
     /// Index of the secondary face in the pass.
     s: usize,
@@ -512,20 +529,18 @@ impl ContactInterfaces {
                     }
                     continue;
                 }
-                let candidates = timed
-                    .search
-                    .time(|| pass.candidates(&x, &pass.local_faces, EVAL_MARGIN));
-                let integrated = timed.integration.time(|| {
-                    pass.normals(&x).map(|normals| {
-                        (
-                            normals,
-                            pass.integrate(&ctx, candidates, tangent, &mut stats),
-                        )
-                    })
-                });
-                let (normals, pairs) = match integrated {
+                let normals = match timed.integration.time(|| pass.normals(&x)) {
                     Ok(n) => n,
                     Err(e) => return Ok(Some(format!("interface '{}': {e}", iface.name))),
+                };
+                let pairs = if tangent {
+                    let candidates = timed
+                        .search
+                        .time(|| pass.candidates(&x, &pass.local_faces, EVAL_MARGIN));
+                    let integrate = || pass.integrate(&ctx, candidates, true, &mut stats);
+                    Rc::new(timed.integration.time(integrate))
+                } else {
+                    pass.values_at(&ctx, Some(timed), &mut stats)
                 };
                 if stats.non_finite > 0 {
                     return Ok(Some(format!(
@@ -615,9 +630,7 @@ impl ContactInterfaces {
         let Ok(normals) = p.normals(&x) else {
             return Vec::new();
         };
-        let mut stats = RejectStats::default();
-        let candidates = p.candidates(&x, &p.local_faces, EVAL_MARGIN);
-        let pairs = p.integrate(&ctx, candidates, false, &mut stats);
+        let pairs = p.values_at(&ctx, None, &mut RejectStats::default());
         let by_node = p.pairs_by_node(&pairs, &p.held);
         p.held
             .iter()
@@ -986,6 +999,13 @@ impl ContactPass {
             .filter(|(n, _)| surface.contains(n))
             .copied()
             .collect();
+        let mut surface_nodes: Vec<usize> = sec_faces
+            .iter()
+            .chain(&pri_faces)
+            .flat_map(|f| f.nodes.iter().copied())
+            .collect();
+        surface_nodes.sort_unstable();
+        surface_nodes.dedup();
         Ok(ContactPass {
             secondary: sec.to_vec(),
             sec_faces,
@@ -998,6 +1018,8 @@ impl ContactPass {
             tallied,
             symmetry,
             method: iface.method,
+            surface_nodes,
+            last_values: RefCell::new(None),
         })
     }
 
@@ -1187,6 +1209,51 @@ impl ContactPass {
             tangent: c.tangent,
         };
         (Some(block), fields)
+    }
+
+    /// The candidate pairs of this rank's faces integrated at positions `ctx.x`, values only,
+    /// with their statistics added to `stats`; the search and the integration are timed in
+    /// `timed` when given.
+    ///
+    /// The weights are a function of the positions alone, and a converged state is evaluated
+    /// several times: by the solve's last residual, then by the Uzawa update, the reactions,
+    /// the output and the commit of the step. So the last result is kept and returned again
+    /// while the pass's nodes sit at the same positions, bit for bit.
+    fn values_at(
+        &self,
+        ctx: &EvalContext,
+        timed: Option<&ContactTimings>,
+        stats: &mut RejectStats,
+    ) -> Rc<Vec<PairData>> {
+        let positions: Vec<[u64; 3]> = self
+            .surface_nodes
+            .iter()
+            .map(|&n| ctx.x[n].map(f64::to_bits))
+            .collect();
+        if let Some(last) = self.last_values.borrow().as_ref() {
+            if last.positions == positions {
+                stats.add(&last.stats);
+                return Rc::clone(&last.pairs);
+            }
+        }
+        let search = || self.candidates(ctx.x, &self.local_faces, EVAL_MARGIN);
+        let candidates = match timed {
+            Some(t) => t.search.time(search),
+            None => search(),
+        };
+        let mut own = RejectStats::default();
+        let integrate = || self.integrate(ctx, candidates, false, &mut own);
+        let pairs = Rc::new(match timed {
+            Some(t) => t.integration.time(integrate),
+            None => integrate(),
+        });
+        stats.add(&own);
+        *self.last_values.borrow_mut() = Some(ValuesAt {
+            positions,
+            pairs: Rc::clone(&pairs),
+            stats: own,
+        });
+        pairs
     }
 
     /// Integrates every candidate pair (secondary face, its candidate primary faces; see
