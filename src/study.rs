@@ -184,6 +184,12 @@ pub struct StudyFile {
     /// Default 0.
     #[serde(default)]
     pub error_floor: f64,
+    /// Wall times within this fraction of each other count as equal on the Pareto front: the
+    /// machine's noise (two runs that do the same work differ by a few per cent, and the
+    /// faster of them would otherwise push the other off the front). Finite, in [0, 1).
+    /// Default 0.
+    #[serde(default)]
+    pub time_noise: f64,
     /// Checks on the study's summary metrics (`slope_* >= 1.9`; see `crate::expect`): printed
     /// with their measured values after the study, which fails when one does not hold.
     /// Default: none.
@@ -327,6 +333,8 @@ pub struct Study {
     pub curves: Option<Curves>,
     /// Errors at or below this count as equal on the Pareto front (`error_floor`).
     pub error_floor: f64,
+    /// Relative wall-time differences at or below this count as equal (`time_noise`).
+    pub time_noise: f64,
     /// Checks on the study's metrics (`expect`).
     pub expectations: Vec<crate::expect::Expectation>,
 }
@@ -413,6 +421,12 @@ impl Study {
             return Err(err(format!(
                 "error_floor = {}: must be finite and >= 0",
                 file.error_floor
+            )));
+        }
+        if !(file.time_noise.is_finite() && (0.0..1.0).contains(&file.time_noise)) {
+            return Err(err(format!(
+                "time_noise = {}: must be finite, >= 0 and < 1",
+                file.time_noise
             )));
         }
         if file.refinement.is_empty() {
@@ -547,6 +561,7 @@ impl Study {
             petsc_options: None,
             curves: None,
             error_floor: file.error_floor,
+            time_noise: file.time_noise,
             expectations: crate::expect::parse_all("expect", &file.expect).map_err(err)?,
         };
         // Every run's scene, built and dropped one at a time.
@@ -876,7 +891,8 @@ impl Study {
         Ok(StudyReport { runs, summary })
     }
 
-    /// The runs on the Pareto front ([`pareto_front`] with the study's `error_floor`), among
+    /// The runs on the Pareto front ([`pareto_front`] with the study's `error_floor` and
+    /// `time_noise`), among
     /// the runs of the variants that are choices (not `reference_only`).
     fn front(&self, runs: &[RunRecord]) -> Vec<usize> {
         let choices: Vec<RunRecord> = runs
@@ -892,7 +908,7 @@ impl Study {
                 }
             })
             .collect();
-        pareto_front(&choices, self.error_floor)
+        pareto_front(&choices, self.error_floor, self.time_noise)
     }
 
     /// A converged run's error: its metric, or the largest absolute value of the metrics (NaN
@@ -1408,9 +1424,10 @@ fn study_csv(runs: &[RunRecord]) -> String {
 
 /// The runs on the Pareto front of error against wall time: converged runs with a finite
 /// error that no other such run beats in both (no more time and no larger error, one of them
-/// strictly), errors at or below `error_floor` counting as equal. Indices into `runs`,
-/// ascending.
-pub fn pareto_front(runs: &[RunRecord], error_floor: f64) -> Vec<usize> {
+/// strictly), errors at or below `error_floor` counting as equal, and times that differ by at
+/// most `time_noise` of the larger counting as equal. Indices into `runs`, ascending.
+pub fn pareto_front(runs: &[RunRecord], error_floor: f64, time_noise: f64) -> Vec<usize> {
+    let same_time = |a: f64, b: f64| (a - b).abs() <= time_noise * a.max(b);
     let points: Vec<(usize, f64, f64)> = runs
         .iter()
         .enumerate()
@@ -1424,9 +1441,14 @@ pub fn pareto_front(runs: &[RunRecord], error_floor: f64) -> Vec<usize> {
     points
         .iter()
         .filter(|&&(i, t, e)| {
-            !points
-                .iter()
-                .any(|&(j, tj, ej)| j != i && tj <= t && ej <= e && (tj < t || ej < e))
+            !points.iter().any(|&(j, tj, ej)| {
+                let (faster, no_slower) = if same_time(tj, t) {
+                    (false, true)
+                } else {
+                    (tj < t, tj < t)
+                };
+                j != i && no_slower && ej <= e && (faster || ej < e)
+            })
         })
         .map(|p| p.0)
         .collect()
@@ -1603,10 +1625,20 @@ mod tests {
             run("failed", 0.1, None, false),
             run("middle", 3.0, Some(-1e-3), true),
         ];
-        assert_eq!(pareto_front(&runs, 0.0), vec![0, 1, 5]);
-        assert!(pareto_front(&[], 0.0).is_empty());
+        assert_eq!(pareto_front(&runs, 0.0, 0.0), vec![0, 1, 5]);
+        assert!(pareto_front(&[], 0.0, 0.0).is_empty());
         // Below the floor, errors are equal: the slow fine run is beaten by the fast one.
-        assert_eq!(pareto_front(&runs, 1e-2), vec![0]);
+        assert_eq!(pareto_front(&runs, 1e-2, 0.0), vec![0]);
+        // Two runs doing the same work, 4 % apart: the slower is beaten without a noise margin
+        // and kept with one; a time tie still loses to a smaller error.
+        let twins = vec![
+            run("defaults", 14.6, Some(7.5e-6), true),
+            run("same_work", 14.0, Some(7.5e-6), true),
+            run("finer_same_time", 14.3, Some(1e-6), true),
+        ];
+        assert_eq!(pareto_front(&twins[..2], 0.0, 0.0), vec![1]);
+        assert_eq!(pareto_front(&twins[..2], 0.0, 0.1), vec![0, 1]);
+        assert_eq!(pareto_front(&twins, 0.0, 0.1), vec![2]);
     }
 
     #[test]

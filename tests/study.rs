@@ -627,7 +627,8 @@ petsc = "-pc_type jacobi -ksp_rtol 1e-13 -ksp_max_it 5000"
 }
 
 /// `metric` as a list: a run's error is the largest of the metrics (checked against each run's
-/// own summary); a negative `error_floor` is refused with one line naming the key.
+/// own summary); a negative `error_floor` and a `time_noise` of 1 or more are refused with one
+/// line naming the key.
 #[test]
 fn the_error_may_be_the_largest_of_several_metrics() {
     let study = small_study("[[variant]]\nname = \"hex8\"\n").replace(
@@ -657,4 +658,17 @@ fn the_error_may_be_the_largest_of_several_metrics() {
     assert!(!o.status.success());
     assert_eq!(stderr.lines().count(), 1, "{stderr}");
     assert!(stderr.contains("error_floor = -1"), "{stderr}");
+
+    let dir = study_dir(
+        "study_time_noise",
+        &format!(
+            "time_noise = 1.5\n{}",
+            small_study("[[variant]]\nname = \"a\"\n")
+        ),
+    );
+    let o = run_study(&dir, &["-q"]);
+    let stderr = text(&o.stderr);
+    assert!(!o.status.success());
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("time_noise = 1.5"), "{stderr}");
 }
