@@ -646,29 +646,24 @@ fn the_error_may_be_the_largest_of_several_metrics() {
         assert_eq!(r["error"].parse::<f64>().unwrap(), want, "{r:?}");
     }
 
-    let dir = study_dir(
-        "study_error_floor",
-        &format!(
-            "error_floor = -1.0\n{}",
-            small_study("[[variant]]\nname = \"a\"\n")
+    // A bad top-level key: one line naming it, and a failure.
+    for (name, line, says) in [
+        (
+            "study_error_floor",
+            "error_floor = -1.0",
+            "error_floor = -1: must be",
         ),
-    );
-    let o = run_study(&dir, &["-q"]);
-    let stderr = text(&o.stderr);
-    assert!(!o.status.success());
-    assert_eq!(stderr.lines().count(), 1, "{stderr}");
-    assert!(stderr.contains("error_floor = -1"), "{stderr}");
-
-    let dir = study_dir(
-        "study_time_noise",
-        &format!(
-            "time_noise = 1.5\n{}",
-            small_study("[[variant]]\nname = \"a\"\n")
+        (
+            "study_time_noise",
+            "time_noise = 1.5",
+            "time_noise = 1.5: must be",
         ),
-    );
-    let o = run_study(&dir, &["-q"]);
-    let stderr = text(&o.stderr);
-    assert!(!o.status.success());
-    assert_eq!(stderr.lines().count(), 1, "{stderr}");
-    assert!(stderr.contains("time_noise = 1.5"), "{stderr}");
+    ] {
+        let study = format!("{line}\n{}", small_study("[[variant]]\nname = \"a\"\n"));
+        let o = run_study(&study_dir(name, &study), &["-q"]);
+        let stderr = text(&o.stderr);
+        assert!(!o.status.success(), "{line}");
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        assert!(stderr.contains(says), "{stderr}");
+    }
 }
