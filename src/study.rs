@@ -123,7 +123,8 @@
 //! - `pareto.png`, `pareto.svg`: the error against wall time on log-log axes, every converged
 //!   run a point, its **Pareto front** ringed: the runs that no other run beats in both (no
 //!   more time and no larger error, one of them strictly; errors at or below the study's
-//!   `error_floor` count as equal; [`pareto_front`]); variants with `reference_only = true`
+//!   `error_floor` count as equal, and so do wall times within its `time_noise` of each
+//!   other; [`pareto_front`]); variants with `reference_only = true`
 //!   are plotted but not candidates. Without `[curves]` the error is the
 //!   metric; with `[curves]` (no exact solution: the reference variant is the truth) it is a
 //!   variant's `curve_max_rel_diff` at the last level, and the reference is not on the plot.
