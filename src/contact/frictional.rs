@@ -438,8 +438,7 @@ impl ContactInterfaces {
             .interfaces
             .iter()
             .flat_map(|i| i.passes.iter())
-            .flat_map(|p| p.sec_faces.iter().chain(&p.pri_faces))
-            .flat_map(|f| f.nodes.iter().copied())
+            .flat_map(|p| p.surface_nodes.iter().copied())
             .collect();
         n.sort_unstable();
         n.dedup();

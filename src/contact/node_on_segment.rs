@@ -466,8 +466,6 @@ mod tests {
         assert!(r[0].abs() < 1e-14 && r[1].abs() < 1e-14, "{r:?}");
     }
 
-    /// The tangent against central differences of the forces, in stick and in slip, on a
-    /// warped primary segment (old segment = a different face).
     /// A node inside the touching band, on either side of the surface: no tangential force,
     /// and the stick stiffness `area eps_t` in its tangential rows (the round-off sign of the
     /// gap must not decide the tangent).
@@ -528,6 +526,8 @@ mod tests {
         }
     }
 
+    /// The tangent against central differences of the forces, in stick and in slip, on a
+    /// warped primary segment (old segment = a different face).
     #[test]
     fn tangent_matches_central_differences() {
         for (mu, old_t, what) in [
