@@ -570,7 +570,8 @@ fn one_refinement_needs_curves_and_curves_keys_are_checked() {
 /// reach its runs only (an impossible `-ksp_type` fails that variant's runs, and the variants
 /// after it run as before); `-pc_type` alone gets GMRES around it (the solver's defaults of the
 /// earlier runs, `-ksp_type preonly` among them, do not leak into it) and gives the direct
-/// solve's error.
+/// solve's error; an option of a variant that nothing reads draws a warning naming it and the
+/// variant, and options that were read draw none.
 #[test]
 fn variants_sweep_ranks_and_petsc_options() {
     let dir = study_dir(
@@ -583,6 +584,7 @@ name = "two_ranks"
 [[variant]]
 name = "one_rank"
 ranks = 1
+petsc = "-no_such_option 1"
 
 [[variant]]
 name = "bogus_solver"
@@ -617,6 +619,14 @@ petsc = "-pc_type jacobi -ksp_rtol 1e-13 -ksp_max_it 5000"
         assert_eq!(bogus["converged"], "false", "{bogus:?}");
         assert!(bogus["error"].is_empty());
     }
+    // An option no PETSc object reads draws a warning naming the variant; options that were
+    // read do not.
+    let stderr = text(&o.stderr);
+    assert!(
+        stderr.contains("variant 'one_rank': PETSc option(s) -no_such_option not used"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("variant 'gmres'"), "{stderr}");
     let s = common::summary(&out);
     assert!(
         s["message"].as_str().unwrap().contains("no_such_solver"),

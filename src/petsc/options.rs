@@ -82,10 +82,16 @@ impl Override {
         self.set
             .iter()
             .filter(|n| {
+                // The database keeps names without their leading dash, and `PetscOptionsUsed`
+                // compares the name as given.
+                let bare = n.to_bytes_with_nul();
+                let bare = bare.strip_prefix(b"-").unwrap_or(bare);
                 let mut used = p::PetscBool::PETSC_FALSE;
-                // SAFETY: a valid NUL-terminated name; the default database.
-                let code =
-                    unsafe { p::PetscOptionsUsed(std::ptr::null_mut(), n.as_ptr(), &mut used) };
+                // SAFETY: `bare` is a NUL-terminated name (a suffix of one); the default
+                // database.
+                let code = unsafe {
+                    p::PetscOptionsUsed(std::ptr::null_mut(), bare.as_ptr().cast(), &mut used)
+                };
                 code == 0 && used != p::PetscBool::PETSC_TRUE
             })
             .map(|n| n.to_string_lossy().into_owned())
