@@ -677,3 +677,26 @@ fn the_error_may_be_the_largest_of_several_metrics() {
         assert!(stderr.contains(says), "{stderr}");
     }
 }
+
+/// Every study shipped in cases/ reads and validates (every variant x refinement of its case:
+/// paths, keys, meshes), so that one no test runs cannot rot unnoticed.
+#[test]
+fn every_shipped_study_is_valid() {
+    let cases = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases");
+    let mut studies = Vec::new();
+    for scene in std::fs::read_dir(&cases).unwrap() {
+        for file in std::fs::read_dir(scene.unwrap().path()).unwrap() {
+            let path = file.unwrap().path();
+            let name = path.file_name().unwrap().to_string_lossy().into_owned();
+            if name.starts_with("study") && name.ends_with(".toml") {
+                studies.push(path);
+            }
+        }
+    }
+    assert!(studies.len() >= 9, "{studies:?}");
+    for path in studies {
+        if let Err(e) = mortar::study::Study::load(&path) {
+            panic!("{}: {e}", path.display());
+        }
+    }
+}
