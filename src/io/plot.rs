@@ -60,6 +60,20 @@ const FONT_FILES: [&str; 3] = [
 /// The family name the font is registered under (and written into the SVG).
 const FAMILY: &str = "sans-serif";
 
+/// The caption's font size: 28 pixels, or less (down to 12) so that a long title fits the
+/// width of the plot.
+fn caption_size<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, title: &str) -> f64 {
+    let width = f64::from(root.dim_in_pixel().0) - 40.0;
+    let mut size = 28.0;
+    while size > 12.0 {
+        match root.estimate_text_size(title, &(FAMILY, size).into_text_style(root)) {
+            Ok((w, _)) if f64::from(w) > width => size -= 1.0,
+            _ => break,
+        }
+    }
+    size
+}
+
 /// At most this many labelled ticks per axis.
 const LABELS: usize = 10;
 
@@ -421,7 +435,7 @@ impl<A: Axis> Plot<'_, A> {
         builder.margin(20).margin_right(30);
         if self.text {
             builder
-                .caption(self.title, (FAMILY, 28))
+                .caption(self.title, (FAMILY, caption_size(root, self.title)))
                 .x_label_area_size(60)
                 .y_label_area_size(85);
         }
@@ -993,6 +1007,25 @@ fn trim_zeros(s: String) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A short title keeps the 28-pixel caption; a long one (a study's Pareto title) is set
+    /// smaller, so that it fits the width of the plot.
+    #[test]
+    fn a_long_caption_is_set_smaller_to_fit() {
+        if font().is_none() {
+            return; // no font on this machine: plots have no text
+        }
+        let mut svg = String::new();
+        let root = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();
+        assert_eq!(caption_size(&root, "Hertz"), 28.0);
+        let long = "study_solver: curve_max_rel_diff to reference against wall time (ringed: \
+                    Pareto front)";
+        let size = caption_size(&root, long);
+        assert!(size < 28.0 && size >= 12.0, "{size}");
+        let style = (FAMILY, size).into_text_style(&root);
+        let (w, _) = root.estimate_text_size(long, &style).unwrap();
+        assert!(f64::from(w) <= f64::from(SIZE.0) - 40.0, "{w}");
+    }
 
     #[test]
     fn slope_of_a_power_law() {
