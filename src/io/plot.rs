@@ -1021,7 +1021,7 @@ mod tests {
         let long = "study_solver: curve_max_rel_diff to reference against wall time (ringed: \
                     Pareto front)";
         let size = caption_size(&root, long);
-        assert!(size < 28.0 && size >= 12.0, "{size}");
+        assert!((12.0..28.0).contains(&size), "{size}");
         let style = (FAMILY, size).into_text_style(&root);
         let (w, _) = root.estimate_text_size(long, &style).unwrap();
         assert!(f64::from(w) <= f64::from(SIZE.0) - 40.0, "{w}");
