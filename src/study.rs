@@ -76,6 +76,16 @@
 //! allocations): an untimed run of the first variant at the first level comes first, into
 //! `<out>/warm_up/`, unless that variant is the `[curves]` reference (not on the front).
 //!
+//! # Errors against the finest run
+//!
+//! A metric that is a value, not an error (a peak pressure, a tip displacement: nothing exact
+//! to compare with), becomes one with `finest_reference = "<variant>"`: once every run is done,
+//! each converged run's error is `|m - m_ref| / |m_ref|`, the relative difference of its metric
+//! to that of the named variant's run at the last (finest) refinement. That run is the truth:
+//! it has no error, so it is on neither plot nor the front. When it failed, or its metric is 0,
+//! no run has an error and the study fails after writing its outputs. The metrics as the runs
+//! reported them stay in the summary (`value_<variant>_<level>`).
+//!
 //! # Curves
 //!
 //! With `[curves]`, the runs at the **last** refinement level are compared: each variant's
@@ -101,7 +111,8 @@
 //! - `runs/<variant>/<level>/`: each run's own outputs (`level` = index of the refinement). With
 //!   `[curves]`, a `history.csv` left there by an earlier study is removed before the run.
 //! - `study.csv`: one row per run, rewritten after every run: `variant, level, h, ranks,
-//!   error` (the metric, or the largest of the metrics; empty for a failed run), `seconds` (wall clock), `newton_its` (total over the steps
+//!   error` (the metric, or the largest of the metrics; with `finest_reference` the relative
+//!   difference to the finest run's, rewritten once every run is done; empty for a failed run), `seconds` (wall clock), `newton_its` (total over the steps
 //!   that converged), `converged` (`true`/`false`), `augmentations` (Uzawa, over the steps),
 //!   `peak_memory_mb` (peak resident memory of the run, largest over the ranks: Linux's
 //!   `VmHWM`, reset before each run; the runs share one process, whose allocator keeps the
@@ -196,6 +207,13 @@ pub struct StudyFile {
     /// Default: none.
     #[serde(default)]
     pub expect: Vec<String>,
+    /// For a metric that is a value, not an error (a peak pressure, a tip displacement, with no
+    /// exact value to compare with): the variant whose run at the last (finest) refinement is
+    /// the truth. Every other run's error is then `|m - m_ref| / |m_ref|`, its metric's
+    /// relative difference to that run's; the reference run itself has no error (not on the
+    /// plots or the front). Not with `[curves]`, whose `reference` plays this part. Default:
+    /// none (the metric is an error).
+    pub finest_reference: Option<String>,
 }
 
 /// The study's `metric`: one name, or several whose largest absolute value is the error.
@@ -338,6 +356,8 @@ pub struct Study {
     pub time_noise: f64,
     /// Checks on the study's metrics (`expect`).
     pub expectations: Vec<crate::expect::Expectation>,
+    /// The variant whose finest run is the truth (`finest_reference`), validated.
+    pub finest_reference: Option<String>,
 }
 
 /// A validated `[curves]` table ([`CurvesSpec`]), defaults resolved.
@@ -473,6 +493,24 @@ impl Study {
                 )));
             }
         }
+        if let Some(r) = &file.finest_reference {
+            if file.curves.is_some() {
+                return Err(err(format!(
+                    "finest_reference = \"{r}\": not with [curves] (curves.reference is the \
+                     truth there)"
+                )));
+            }
+            if !names.contains(r.as_str()) {
+                return Err(err(format!(
+                    "finest_reference = \"{r}\": no such variant (variants: {})",
+                    file.variant
+                        .iter()
+                        .map(|v| v.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )));
+            }
+        }
         if let Some(c) = &file.curves {
             for (key, column) in [("x", &c.x), ("y", &c.y)] {
                 if column.trim().is_empty() {
@@ -564,6 +602,7 @@ impl Study {
             error_floor: file.error_floor,
             time_noise: file.time_noise,
             expectations: crate::expect::parse_all("expect", &file.expect).map_err(err)?,
+            finest_reference: file.finest_reference,
         };
         // Every run's scene, built and dropped one at a time.
         let base_scene = Scene::load(&study.case)?;
@@ -771,6 +810,32 @@ impl Study {
                 }
             }
         }
+        // With `finest_reference`, the metrics become errors against the finest run's.
+        let mut reference_failed = None;
+        if let Some(reference) = &self.finest_reference {
+            let values = errors_against_finest(&mut runs, reference, self.refinements.len() - 1);
+            if rank == 0 {
+                summary = self.summary(&runs, petsc.size(), started.elapsed().as_secs_f64());
+                for (r, value) in runs.iter().zip(&values) {
+                    if let Some(value) = value {
+                        summary
+                            .metrics
+                            .insert(format!("value_{}_{}", r.variant, r.level), *value);
+                    }
+                }
+                write_atomic(&out.join("study.csv"), study_csv(&runs).as_bytes())?;
+                summary.write(&out.join("summary.json"))?;
+            }
+            if !runs.iter().any(|r| r.error.is_some()) {
+                reference_failed = Some(format!(
+                    "study {}: the finest_reference run ({reference} at level {}) failed or its \
+                     {} is 0: no run has an error",
+                    self.name,
+                    self.refinements.len() - 1,
+                    self.metric
+                ));
+            }
+        }
         if self.curves.is_none() {
             for i in self.front(&runs) {
                 runs[i].on_front = true;
@@ -864,6 +929,9 @@ impl Study {
                 done.join("; "),
                 out.display()
             ));
+        }
+        if let Some(msg) = reference_failed {
+            return Err(Error::Solve(msg));
         }
         let may_fail = |r: &&RunRecord| {
             self.variants
@@ -1059,9 +1127,10 @@ impl Study {
         let mut note = format!("Pareto front of {metric} against wall time: {front} run(s)");
         let default = self.variants.iter().find(|v| v.is_default());
         if let Some(d) = default {
+            // The runs with an error (not a finest_reference run, the truth).
             let mine: Vec<&RunRecord> = runs
                 .iter()
-                .filter(|r| r.variant == d.name && r.converged)
+                .filter(|r| r.variant == d.name && r.converged && r.error.is_some())
                 .collect();
             if !mine.is_empty() {
                 let on = mine.iter().filter(|r| r.on_front).count();
@@ -1367,6 +1436,35 @@ fn curve_scores(
         .collect()
 }
 
+/// Turns the runs' metrics into errors against the finest run of variant `reference` (at
+/// `last_level`): `|m - m_ref| / |m_ref|` for every converged run; the reference run itself
+/// keeps no error (it is the truth), and when the reference run failed or its metric is 0 no
+/// run has one. Returns each run's metric as it was (`None` for a run without one).
+fn errors_against_finest(
+    runs: &mut [RunRecord],
+    reference: &str,
+    last_level: usize,
+) -> Vec<Option<f64>> {
+    let values: Vec<Option<f64>> = runs
+        .iter()
+        .map(|r| r.error.filter(|_| r.converged))
+        .collect();
+    let truth = runs
+        .iter()
+        .zip(&values)
+        .find(|(r, _)| r.variant == reference && r.level == last_level)
+        .and_then(|(_, v)| *v)
+        .filter(|&m| m != 0.0 && m.is_finite());
+    for (r, value) in runs.iter_mut().zip(&values) {
+        let is_truth = r.variant == reference && r.level == last_level;
+        r.error = match (truth, value) {
+            (Some(m_ref), Some(m)) if !is_truth => Some((m - m_ref).abs() / m_ref.abs()),
+            _ => None,
+        };
+    }
+    values
+}
+
 /// Gives every rank rank 0's figures of a run (rank 0 runs every variant; the others may have
 /// waited, and their clocks differ), so that all ranks agree on the study's outcome, and
 /// returns rank 0's `fatal` (the study must stop). The failure message stays on rank 0, which
@@ -1640,6 +1738,55 @@ mod tests {
         assert_eq!(pareto_front(&twins[..2], 0.0, 0.0), vec![1]);
         assert_eq!(pareto_front(&twins[..2], 0.0, 0.1), vec![0, 1]);
         assert_eq!(pareto_front(&twins, 0.0, 0.1), vec![2]);
+    }
+
+    /// Errors against the finest run: relative differences of the metric to the reference
+    /// variant's run at the last level, which itself has none; no errors at all when that run
+    /// failed or its metric is 0; the metrics as they were are returned.
+    #[test]
+    fn errors_against_the_finest_run() {
+        let run = |variant: &str, level: usize, value: f64, converged: bool| RunRecord {
+            variant: variant.into(),
+            level,
+            h: 1.0 / (level + 1) as f64,
+            ranks: 1,
+            error: Some(value),
+            seconds: 1.0,
+            newton_its: 0,
+            augmentations: 0,
+            peak_memory_mb: None,
+            converged,
+            on_front: false,
+            message: None,
+        };
+        let study = || {
+            vec![
+                run("hex8", 0, 1.2, true),
+                run("hex8", 1, 1.05, true),
+                run("hex27", 0, 0.9, true),
+                run("hex27", 1, -1.0, true),
+                run("broken", 1, 7.0, false),
+            ]
+        };
+        let mut runs = study();
+        let values = errors_against_finest(&mut runs, "hex27", 1);
+        let errors: Vec<Option<f64>> = runs.iter().map(|r| r.error).collect();
+        let close = |e: Option<f64>, want: f64| (e.unwrap() - want).abs() < 1e-15;
+        assert!(close(errors[0], 2.2) && close(errors[1], 2.05) && close(errors[2], 1.9));
+        assert_eq!(errors[3], None, "the truth has no error");
+        assert_eq!(errors[4], None, "a failed run has none");
+        assert_eq!(
+            values,
+            vec![Some(1.2), Some(1.05), Some(0.9), Some(-1.0), None]
+        );
+
+        // The reference run failed (or its metric is 0): no run has an error.
+        for (broken, value) in [(false, 1.0), (true, 0.0)] {
+            let mut runs = study();
+            runs[3] = run("hex27", 1, value, broken);
+            errors_against_finest(&mut runs, "hex27", 1);
+            assert!(runs.iter().all(|r| r.error.is_none()));
+        }
     }
 
     #[test]

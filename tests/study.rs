@@ -700,3 +700,69 @@ fn every_shipped_study_is_valid() {
         }
     }
 }
+
+/// `finest_reference`: for a metric that is a value, every run's error is its relative
+/// difference to the reference variant's finest run (checked against each run's own summary),
+/// the reference run has none (not on the front), the values are kept in the summary; a bad
+/// `finest_reference` is refused in one line naming the key.
+#[test]
+fn errors_may_be_taken_against_the_finest_run() {
+    let variants = "[[variant]]\nname = \"a\"\n\n[[variant]]\nname = \"tight\"\n\
+                    set = { \"newton.rtol\" = 1e-12 }\n";
+    let study = format!("finest_reference = \"a\"\n{}", small_study(variants));
+    let dir = study_dir("study_finest_reference", &study);
+    let o = run_study(&dir, &["-q"]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let out = dir.join("out");
+    let value = |v: &str, level: &str| {
+        common::summary(&out.join(format!("runs/{v}/{level}")))["metrics"]["energy_error"]
+            .as_f64()
+            .unwrap()
+    };
+    let truth = value("a", "1");
+    let s = common::summary(&out);
+    for r in csv_rows(&out) {
+        let (v, level) = (r["variant"].as_str(), r["level"].as_str());
+        let m = value(v, level);
+        assert_eq!(s["metrics"][format!("value_{v}_{level}")].as_f64(), Some(m));
+        if (v, level) == ("a", "1") {
+            assert!(r["error"].is_empty(), "{r:?}");
+            assert_eq!(r["on_front"], "false");
+            continue;
+        }
+        let want = (m - truth).abs() / truth.abs();
+        let error: f64 = r["error"].parse().unwrap();
+        assert!(
+            (error - want).abs() <= 1e-12 * want.max(1e-300),
+            "{r:?}: {want}"
+        );
+        assert_eq!(
+            s["metrics"][format!("error_{v}_{level}")].as_f64(),
+            Some(error)
+        );
+    }
+    assert!(out.join("pareto.png").is_file() && out.join("convergence.png").is_file());
+
+    let one = small_study("[[variant]]\nname = \"a\"\n");
+    for (name, study, says) in [
+        (
+            "study_finest_no_variant",
+            format!("finest_reference = \"nope\"\n{one}"),
+            "finest_reference = \"nope\": no such variant",
+        ),
+        (
+            "study_finest_with_curves",
+            format!(
+                "finest_reference = \"a\"\n{one}\n[curves]\nx = \"load\"\ny = \"load\"\n\
+                 reference = \"a\"\n"
+            ),
+            "not with [curves]",
+        ),
+    ] {
+        let o = run_study(&study_dir(name, &study), &["-q"]);
+        let stderr = text(&o.stderr);
+        assert!(!o.status.success(), "{name}");
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        assert!(stderr.contains(says), "{stderr}");
+    }
+}
