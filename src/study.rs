@@ -112,17 +112,19 @@
 //!   `[curves]`, a `history.csv` left there by an earlier study is removed before the run.
 //! - `study.csv`: one row per run, rewritten after every run: `variant, level, h, ranks,
 //!   error` (the metric, or the largest of the metrics; with `finest_reference` the relative
-//!   difference to the finest run's, rewritten once every run is done; empty for a failed run), `seconds` (wall clock), `newton_its` (total over the steps
-//!   that converged), `converged` (`true`/`false`), `augmentations` (Uzawa, over the steps),
-//!   `peak_memory_mb` (peak resident memory of the run, largest over the ranks: Linux's
-//!   `VmHWM`, reset before each run; the runs share one process, whose allocator keeps the
+//!   difference to the finest run's, rewritten once every run is done; empty for a failed
+//!   run), `seconds` (wall clock), `newton_its` (total over the steps that converged),
+//!   `converged` (`true`/`false`), `augmentations` (Uzawa, over the steps), `peak_memory_mb`
+//!   (peak resident memory of the run, largest over the ranks: Linux's `VmHWM`, reset before
+//!   each run; the runs share one process, whose allocator keeps the
 //!   memory an earlier, larger run freed, so a run after a larger one reports at least that:
 //!   order the variants from small to large, or read the first run of each size), `on_front`
 //!   (see below).
 //! - `summary.json` ([`Summary`]): `case` = the study name (the study file's stem), `converged` =
 //!   every run converged, `metrics`: `slope_<variant>` (least-squares slope of log(error)
 //!   against log(h) over the variant's converged runs, when there are two or more) and
-//!   `error_<variant>_<level>`, plus `failed_runs`, and with `[curves]`
+//!   `error_<variant>_<level>`, plus `failed_runs`, with `finest_reference` the values
+//!   `value_<variant>_<level>`, and with `[curves]`
 //!   `curve_max_rel_diff_<variant>` and `smoothness_<variant>` (see above, added once every
 //!   run is done); `timings.total`;
 //!   `message` lists the failed runs. Rewritten after every run.
