@@ -81,10 +81,14 @@
 //! A metric that is a value, not an error (a peak pressure, a tip displacement: nothing exact
 //! to compare with), becomes one with `finest_reference = "<variant>"`: once every run is done,
 //! each converged run's error is `|m - m_ref| / |m_ref|`, the relative difference of its metric
-//! to that of the named variant's run at the last (finest) refinement. That run is the truth:
-//! it has no error, so it is on neither plot nor the front. When it failed, or its metric is 0,
-//! no run has an error and the study fails after writing its outputs. The metrics as the runs
-//! reported them stay in the summary (`value_<variant>_<level>`).
+//! to that of the named variant's run at the finest refinement (the smallest h). That run is
+//! the truth: it has no error, so it is on neither plot nor the front. When it failed, or its
+//! metric is 0, no run has an error and the study fails after writing its outputs. The metrics
+//! as the runs reported them stay in the summary (`value_<variant>_<level>`). One metric only
+//! (the largest of several values is no value). Mind what a finest run can tell: every error
+//! levels off at the truth's own error, and the reference variant's slope (`slope_<variant>`,
+//! over its coarser levels) comes out steeper than its true order, most at the level next to
+//! the finest.
 //!
 //! # Curves
 //!
@@ -139,7 +143,7 @@
 //!   `error_floor` count as equal, and so do wall times within its `time_noise` of each
 //!   other; [`pareto_front`]); variants with `reference_only = true`
 //!   are plotted but not candidates. Without `[curves]` the error is the
-//!   metric; with `[curves]` (no exact solution: the reference variant is the truth) it is a
+//!   metric (with `finest_reference`, its relative difference to the finest run's); with `[curves]` (no exact solution: the reference variant is the truth) it is a
 //!   variant's `curve_max_rel_diff` at the last level, and the reference is not on the plot.
 //!   The summary gets `on_front_<variant>_<level>` (1 or 0) and, for the default variant (the
 //!   first with no edits, no `petsc` and no `ranks`: the case file as it is),
@@ -210,11 +214,11 @@ pub struct StudyFile {
     #[serde(default)]
     pub expect: Vec<String>,
     /// For a metric that is a value, not an error (a peak pressure, a tip displacement, with no
-    /// exact value to compare with): the variant whose run at the last (finest) refinement is
-    /// the truth. Every other run's error is then `|m - m_ref| / |m_ref|`, its metric's
+    /// exact value to compare with): the variant whose run at the finest refinement (the
+    /// smallest h) is the truth. Every other run's error is then `|m - m_ref| / |m_ref|`, its metric's
     /// relative difference to that run's; the reference run itself has no error (not on the
-    /// plots or the front). Not with `[curves]`, whose `reference` plays this part. Default:
-    /// none (the metric is an error).
+    /// plots or the front). One metric, not a list. Not with `[curves]`, whose `reference`
+    /// plays this part. Default: none (the metric is an error).
     pub finest_reference: Option<String>,
 }
 
@@ -496,6 +500,12 @@ impl Study {
             }
         }
         if let Some(r) = &file.finest_reference {
+            if metric_parts.len() > 1 {
+                return Err(err(format!(
+                    "finest_reference = \"{r}\": needs one metric, not a list (the largest of \
+                     several values is no value to compare)"
+                )));
+            }
             if file.curves.is_some() {
                 return Err(err(format!(
                     "finest_reference = \"{r}\": not with [curves] (curves.reference is the \
@@ -815,7 +825,15 @@ impl Study {
         // With `finest_reference`, the metrics become errors against the finest run's.
         let mut reference_failed = None;
         if let Some(reference) = &self.finest_reference {
-            let values = errors_against_finest(&mut runs, reference, self.refinements.len() - 1);
+            let finest = self.finest_level();
+            let (values, truth) = errors_against_finest(&mut runs, reference, finest);
+            if truth.is_none() {
+                reference_failed = Some(format!(
+                    "study {}: the finest_reference run ({reference} at level {finest}) failed \
+                     or its {} is 0 or not finite: no run has an error",
+                    self.name, self.metric
+                ));
+            }
             if rank == 0 {
                 summary = self.summary(&runs, petsc.size(), started.elapsed().as_secs_f64());
                 for (r, value) in runs.iter().zip(&values) {
@@ -825,17 +843,11 @@ impl Study {
                             .insert(format!("value_{}_{}", r.variant, r.level), *value);
                     }
                 }
+                if reference_failed.is_some() {
+                    summary.message.clone_from(&reference_failed);
+                }
                 write_atomic(&out.join("study.csv"), study_csv(&runs).as_bytes())?;
                 summary.write(&out.join("summary.json"))?;
-            }
-            if !runs.iter().any(|r| r.error.is_some()) {
-                reference_failed = Some(format!(
-                    "study {}: the finest_reference run ({reference} at level {}) failed or its \
-                     {} is 0: no run has an error",
-                    self.name,
-                    self.refinements.len() - 1,
-                    self.metric
-                ));
             }
         }
         if self.curves.is_none() {
@@ -860,7 +872,7 @@ impl Study {
                     &out.join("convergence"),
                     &self.title,
                     "mesh size h",
-                    &self.metric,
+                    &self.error_label(),
                     &series,
                 )?;
                 plot::print_warnings(warnings);
@@ -879,7 +891,7 @@ impl Study {
                 done.push(format!("slopes {}", slopes.join(", ")));
             }
             if self.curves.is_none() {
-                done.push(self.write_pareto(&runs, &self.metric, &mut summary, out)?);
+                done.push(self.write_pareto(&runs, &self.error_label(), &mut summary, out)?);
                 write_atomic(&out.join("study.csv"), study_csv(&runs).as_bytes())?;
             }
             if let Some(curves) = &self.curves {
@@ -960,6 +972,26 @@ impl Study {
             )));
         }
         Ok(StudyReport { runs, summary })
+    }
+
+    /// The level of the finest refinement (the smallest h).
+    fn finest_level(&self) -> usize {
+        (0..self.refinements.len())
+            .min_by(|&a, &b| self.refinements[a].h.total_cmp(&self.refinements[b].h))
+            .unwrap_or(0)
+    }
+
+    /// What a run's error is, for plots and notes: the metric, or with `finest_reference` its
+    /// relative difference to the finest run's.
+    fn error_label(&self) -> String {
+        match &self.finest_reference {
+            Some(reference) => format!(
+                "relative difference of {} to {reference} at h = {}",
+                self.metric,
+                self.refinements[self.finest_level()].h
+            ),
+            None => self.metric.clone(),
+        }
     }
 
     /// The runs on the Pareto front ([`pareto_front`] with the study's `error_floor` and
@@ -1119,7 +1151,7 @@ impl Study {
             metric,
             &series,
         )?);
-        for r in runs.iter().filter(|r| r.converged) {
+        for r in runs.iter().filter(|r| r.converged && r.error.is_some()) {
             summary.metrics.insert(
                 format!("on_front_{}_{}", r.variant, r.level),
                 f64::from(u8::from(r.on_front)),
@@ -1439,14 +1471,15 @@ fn curve_scores(
 }
 
 /// Turns the runs' metrics into errors against the finest run of variant `reference` (at
-/// `last_level`): `|m - m_ref| / |m_ref|` for every converged run; the reference run itself
+/// level `finest`): `|m - m_ref| / |m_ref|` for every converged run; the reference run itself
 /// keeps no error (it is the truth), and when the reference run failed or its metric is 0 no
-/// run has one. Returns each run's metric as it was (`None` for a run without one).
+/// run has one. Returns each run's metric as it was (`None` for a run without one) and the
+/// truth `m_ref` (`None` when there is none).
 fn errors_against_finest(
     runs: &mut [RunRecord],
     reference: &str,
-    last_level: usize,
-) -> Vec<Option<f64>> {
+    finest: usize,
+) -> (Vec<Option<f64>>, Option<f64>) {
     let values: Vec<Option<f64>> = runs
         .iter()
         .map(|r| r.error.filter(|_| r.converged))
@@ -1454,17 +1487,17 @@ fn errors_against_finest(
     let truth = runs
         .iter()
         .zip(&values)
-        .find(|(r, _)| r.variant == reference && r.level == last_level)
+        .find(|(r, _)| r.variant == reference && r.level == finest)
         .and_then(|(_, v)| *v)
         .filter(|&m| m != 0.0 && m.is_finite());
     for (r, value) in runs.iter_mut().zip(&values) {
-        let is_truth = r.variant == reference && r.level == last_level;
+        let is_truth = r.variant == reference && r.level == finest;
         r.error = match (truth, value) {
             (Some(m_ref), Some(m)) if !is_truth => Some((m - m_ref).abs() / m_ref.abs()),
             _ => None,
         };
     }
-    values
+    (values, truth)
 }
 
 /// Gives every rank rank 0's figures of a run (rank 0 runs every variant; the others may have
@@ -1771,7 +1804,8 @@ mod tests {
             ]
         };
         let mut runs = study();
-        let values = errors_against_finest(&mut runs, "hex27", 1);
+        let (values, truth) = errors_against_finest(&mut runs, "hex27", 1);
+        assert_eq!(truth, Some(-1.0));
         let errors: Vec<Option<f64>> = runs.iter().map(|r| r.error).collect();
         let close = |e: Option<f64>, want: f64| (e.unwrap() - want).abs() < 1e-15;
         assert!(close(errors[0], 2.2) && close(errors[1], 2.05) && close(errors[2], 1.9));
@@ -1783,10 +1817,10 @@ mod tests {
         );
 
         // The reference run failed (or its metric is 0): no run has an error.
-        for (broken, value) in [(false, 1.0), (true, 0.0)] {
+        for (converged, value) in [(false, 1.0), (true, 0.0)] {
             let mut runs = study();
-            runs[3] = run("hex27", 1, value, broken);
-            errors_against_finest(&mut runs, "hex27", 1);
+            runs[3] = run("hex27", 1, value, converged);
+            assert_eq!(errors_against_finest(&mut runs, "hex27", 1).1, None);
             assert!(runs.iter().all(|r| r.error.is_none()));
         }
     }

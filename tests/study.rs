@@ -571,7 +571,8 @@ fn one_refinement_needs_curves_and_curves_keys_are_checked() {
 /// after it run as before); `-pc_type` alone gets GMRES around it (the solver's defaults of the
 /// earlier runs, `-ksp_type preonly` among them, do not leak into it) and gives the direct
 /// solve's error; an option of a variant that nothing reads draws a warning naming it and the
-/// variant, and options that were read draw none.
+/// variant (also when it overrides an option already set), and options that were read draw
+/// none.
 #[test]
 fn variants_sweep_ranks_and_petsc_options() {
     let dir = study_dir(
@@ -593,12 +594,20 @@ may_fail = true
 
 [[variant]]
 name = "gmres"
-petsc = "-pc_type jacobi -ksp_rtol 1e-13 -ksp_max_it 5000"
+petsc = "-pc_type jacobi -ksp_rtol 1e-13 -ksp_max_it 5000 -mat_mumps_icntl_8 77"
 "#,
         ),
     );
     let out = dir.join("out");
-    let o = common::run_subcommand("study", &dir.join("study.toml"), 2, &out, &[]);
+    // The command line sets an option the gmres variant overrides (and, without MUMPS, does
+    // not read), while the other variants read it.
+    let o = common::run_subcommand(
+        "study",
+        &dir.join("study.toml"),
+        2,
+        &out,
+        &["-mat_mumps_icntl_8", "0"],
+    );
     let stdout = text(&o.stdout);
     assert!(o.status.success(), "{stdout}\n{}", text(&o.stderr));
     let rows = csv_rows(&out);
@@ -619,14 +628,20 @@ petsc = "-pc_type jacobi -ksp_rtol 1e-13 -ksp_max_it 5000"
         assert_eq!(bogus["converged"], "false", "{bogus:?}");
         assert!(bogus["error"].is_empty());
     }
-    // An option no PETSc object reads draws a warning naming the variant; options that were
-    // read do not.
+    // An option no PETSc object reads draws a warning naming the variant, also when it
+    // overrides one the command line set; options that were read do not. The command line's
+    // option, read by the other variants, keeps its mark after the override: no warning at
+    // the end.
     let stderr = text(&o.stderr);
     assert!(
         stderr.contains("variant 'one_rank': PETSc option(s) -no_such_option not used"),
         "{stderr}"
     );
-    assert!(!stderr.contains("variant 'gmres'"), "{stderr}");
+    assert!(
+        stderr.contains("variant 'gmres': PETSc option(s) -mat_mumps_icntl_8 not used"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("never used"), "{stderr}");
     let s = common::summary(&out);
     assert!(
         s["message"].as_str().unwrap().contains("no_such_solver"),
@@ -685,7 +700,11 @@ fn every_shipped_study_is_valid() {
     let cases = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases");
     let mut studies = Vec::new();
     for scene in std::fs::read_dir(&cases).unwrap() {
-        for file in std::fs::read_dir(scene.unwrap().path()).unwrap() {
+        let scene = scene.unwrap().path();
+        if !scene.is_dir() {
+            continue;
+        }
+        for file in std::fs::read_dir(scene).unwrap() {
             let path = file.unwrap().path();
             let name = path.file_name().unwrap().to_string_lossy().into_owned();
             if name.starts_with("study") && name.ends_with(".toml") {
@@ -703,13 +722,22 @@ fn every_shipped_study_is_valid() {
 
 /// `finest_reference`: for a metric that is a value, every run's error is its relative
 /// difference to the reference variant's finest run (checked against each run's own summary),
-/// the reference run has none (not on the front), the values are kept in the summary; a bad
-/// `finest_reference` is refused in one line naming the key.
+/// the reference run has none (not on the front), the finest is the smallest h whatever the
+/// order of the refinements, the values are kept in the summary; a bad `finest_reference` (no
+/// such variant, with `[curves]`, with a list of metrics) is refused in one line naming the
+/// key.
 #[test]
 fn errors_may_be_taken_against_the_finest_run() {
-    let variants = "[[variant]]\nname = \"a\"\n\n[[variant]]\nname = \"tight\"\n\
-                    set = { \"newton.rtol\" = 1e-12 }\n";
-    let study = format!("finest_reference = \"a\"\n{}", small_study(variants));
+    let variants = "[[variant]]\nname = \"a\"\n\n[[variant]]\nname = \"hex8\"\n\
+                    set = { \"mesh.0.element\" = \"hex8\" }\n";
+    // The refinements listed finest first: the truth is the smallest h, level 0.
+    let coarse = "[[refinement]]\nh = 0.5\nset = { \"mesh.0.n_circ\" = 2, \"mesh.0.n_rad\" = 2 }\n";
+    let fine = "[[refinement]]\nh = 0.3333333333333333\n\
+                set = { \"mesh.0.n_circ\" = 3, \"mesh.0.n_rad\" = 3 }\n";
+    let study = small_study(variants);
+    assert!(study.contains(coarse) && study.contains(fine));
+    let study = study.replacen(coarse, "", 1).replacen(fine, "", 1);
+    let study = format!("finest_reference = \"a\"\n{study}\n{fine}\n{coarse}");
     let dir = study_dir("study_finest_reference", &study);
     let o = run_study(&dir, &["-q"]);
     assert!(o.status.success(), "{}", text(&o.stderr));
@@ -719,26 +747,27 @@ fn errors_may_be_taken_against_the_finest_run() {
             .as_f64()
             .unwrap()
     };
-    let truth = value("a", "1");
+    let truth = value("a", "0");
     let s = common::summary(&out);
-    for r in csv_rows(&out) {
+    let rows = csv_rows(&out);
+    assert_eq!(rows.len(), 4);
+    for r in rows {
         let (v, level) = (r["variant"].as_str(), r["level"].as_str());
         let m = value(v, level);
         assert_eq!(s["metrics"][format!("value_{v}_{level}")].as_f64(), Some(m));
-        if (v, level) == ("a", "1") {
+        if (v, level) == ("a", "0") {
             assert!(r["error"].is_empty(), "{r:?}");
             assert_eq!(r["on_front"], "false");
             continue;
         }
         let want = (m - truth).abs() / truth.abs();
+        assert!(want > 1e-6, "{r:?}: the runs' values differ");
         let error: f64 = r["error"].parse().unwrap();
+        assert!((error - want).abs() <= 1e-12 * want, "{r:?}: {want}");
+        let in_summary = s["metrics"][format!("error_{v}_{level}")].as_f64().unwrap();
         assert!(
-            (error - want).abs() <= 1e-12 * want.max(1e-300),
-            "{r:?}: {want}"
-        );
-        assert_eq!(
-            s["metrics"][format!("error_{v}_{level}")].as_f64(),
-            Some(error)
+            (in_summary - want).abs() <= 1e-12 * want,
+            "{in_summary} against {want}"
         );
     }
     assert!(out.join("pareto.png").is_file() && out.join("convergence.png").is_file());
@@ -757,6 +786,17 @@ fn errors_may_be_taken_against_the_finest_run() {
                  reference = \"a\"\n"
             ),
             "not with [curves]",
+        ),
+        (
+            "study_finest_metric_list",
+            format!(
+                "finest_reference = \"a\"\n{}",
+                one.replace(
+                    "metric = \"energy_error\"",
+                    "metric = [\"energy_error\", \"free_dofs\"]"
+                )
+            ),
+            "needs one metric, not a list",
         ),
     ] {
         let o = run_study(&study_dir(name, &study), &["-q"]);

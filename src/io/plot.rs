@@ -63,7 +63,7 @@ const FAMILY: &str = "sans-serif";
 /// The caption's font size: 28 pixels, or less (down to 12) so that a long title fits the
 /// width of the plot.
 fn caption_size<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, title: &str) -> f64 {
-    let width = f64::from(root.dim_in_pixel().0) - 40.0;
+    let width = f64::from(root.dim_in_pixel().0) - 60.0;
     let mut size = 28.0;
     while size > 12.0 {
         match root.estimate_text_size(title, &(FAMILY, size).into_text_style(root)) {
@@ -1024,7 +1024,7 @@ mod tests {
         assert!((12.0..28.0).contains(&size), "{size}");
         let style = (FAMILY, size).into_text_style(&root);
         let (w, _) = root.estimate_text_size(long, &style).unwrap();
-        assert!(f64::from(w) <= f64::from(SIZE.0) - 40.0, "{w}");
+        assert!(f64::from(w) <= f64::from(SIZE.0) - 60.0, "{w}");
     }
 
     #[test]

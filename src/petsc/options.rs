@@ -36,16 +36,36 @@ pub fn set_default(name: &str, value: &str) -> Result<()> {
 
 /// Options set for a while (a study variant's runs): [`Override::set`] puts each `-name value`
 /// into the database, over the options file and the command line, remembering what was there;
-/// dropping the guard puts the old values back (or clears the names that were not set). The
+/// dropping the guard puts the old values back (or clears the names that were not set), each
+/// with its mark of having been read, so that PETSc's count of unused options stays true. The
 /// linear solver's defaults, which a run writes into the database when the user chose none
 /// (`ksp::set_linear_solver_defaults`), are put back too, so that they follow each run's own
 /// options and never leak from one run into the next.
 #[derive(Debug)]
 pub struct Override {
-    /// Each name with its previous value: `None` = not set, `Some(None)` = set without value.
-    previous: Vec<(CString, Option<Option<CString>>)>,
+    /// Each name with what was there before.
+    previous: Vec<(CString, Saved)>,
     /// The names set (not the defaults only saved).
     set: Vec<CString>,
+}
+
+/// An option's value before an [`Override`], and whether something had read it.
+#[derive(Debug)]
+struct Saved {
+    /// `None` = not set, `Some(None)` = set without a value.
+    value: Option<Option<CString>>,
+    used: bool,
+}
+
+impl Saved {
+    fn of(name: &CString) -> Result<Saved> {
+        // `used` first: reading the value marks it used.
+        let used = is_used(name);
+        Ok(Saved {
+            value: current_value(name)?,
+            used,
+        })
+    }
 }
 
 impl Override {
@@ -57,43 +77,29 @@ impl Override {
         };
         for name in super::ksp::DEFAULTED_OPTIONS {
             let n = CString::new(name).expect("option names have no NUL");
-            let before = current_value(&n)?;
-            guard.previous.push((n, before));
+            let saved = Saved::of(&n)?;
+            guard.previous.push((n, saved));
         }
         for (name, value) in options {
             let n = CString::new(name.as_str()).expect("option names have no NUL");
             if !guard.previous.iter().any(|(saved, _)| *saved == n) {
-                let before = current_value(&n)?;
-                guard.previous.push((n.clone(), before));
+                let saved = Saved::of(&n)?;
+                guard.previous.push((n.clone(), saved));
             }
             guard.set.push(n.clone());
             let v = value
                 .as_deref()
                 .map(|v| CString::new(v).expect("option values have no NUL"));
-            set_value(&n, v.as_ref())?;
+            set_fresh(&n, v.as_ref())?;
         }
         Ok(guard)
     }
-}
 
-impl Override {
     /// The options set that no PETSc object read (typos, or options of a solver not in use).
     pub fn unused(&self) -> Vec<String> {
         self.set
             .iter()
-            .filter(|n| {
-                // The database keeps names without their leading dash, and `PetscOptionsUsed`
-                // compares the name as given.
-                let bare = n.to_bytes_with_nul();
-                let bare = bare.strip_prefix(b"-").unwrap_or(bare);
-                let mut used = p::PetscBool::PETSC_FALSE;
-                // SAFETY: `bare` is a NUL-terminated name (a suffix of one); the default
-                // database.
-                let code = unsafe {
-                    p::PetscOptionsUsed(std::ptr::null_mut(), bare.as_ptr().cast(), &mut used)
-                };
-                code == 0 && used != p::PetscBool::PETSC_TRUE
-            })
+            .filter(|n| !is_used(n))
             .map(|n| n.to_string_lossy().into_owned())
             .collect()
     }
@@ -102,8 +108,14 @@ impl Override {
 impl Drop for Override {
     fn drop(&mut self) {
         for (name, before) in self.previous.drain(..).rev() {
-            let restored = match &before {
-                Some(value) => set_value(&name, value.as_ref()),
+            let restored = match &before.value {
+                Some(value) => set_fresh(&name, value.as_ref()).and_then(|()| {
+                    if before.used {
+                        current_value(&name).map(drop)
+                    } else {
+                        Ok(())
+                    }
+                }),
                 // SAFETY: a valid NUL-terminated name; the default database.
                 None => chk!(PetscOptionsClearValue(std::ptr::null_mut(), name.as_ptr())),
             };
@@ -115,6 +127,26 @@ impl Drop for Override {
             }
         }
     }
+}
+
+/// True when something read `-name` since it was set. The database keeps names without their
+/// leading dash, and `PetscOptionsUsed` compares the name as given.
+fn is_used(name: &CString) -> bool {
+    let bare = name.to_bytes_with_nul();
+    let bare = bare.strip_prefix(b"-").unwrap_or(bare);
+    let mut used = p::PetscBool::PETSC_FALSE;
+    // SAFETY: `bare` is a NUL-terminated name (a suffix of one); the default database.
+    let code =
+        unsafe { p::PetscOptionsUsed(std::ptr::null_mut(), bare.as_ptr().cast(), &mut used) };
+    code == 0 && used == p::PetscBool::PETSC_TRUE
+}
+
+/// Sets `-name` as if it had never been set: PETSc keeps an entry's mark of having been read
+/// when its value is replaced, so the entry is cleared first.
+fn set_fresh(name: &CString, value: Option<&CString>) -> Result<()> {
+    // SAFETY: a valid NUL-terminated name; the default database.
+    chk!(PetscOptionsClearValue(std::ptr::null_mut(), name.as_ptr()))?;
+    set_value(name, value)
 }
 
 /// The value of `-name` in the database: `None` if it is not set, `Some(None)` for a flag.
