@@ -67,7 +67,8 @@
 //! so a mistake in the last variant is reported at once, not after the first runs. Every run
 //! shares one PETSc: its options are the base case's options file (no variant may change
 //! `petsc_options`), the command line, and the variant's own `petsc` options, set for its runs
-//! only (options a variant sets that no PETSc object reads draw a warning naming the variant).
+//! only (options a variant sets that no PETSc object reads at its first run draw one warning
+//! naming the variant).
 //! A variant with `ranks = k` runs on the first k ranks of the job (a split communicator); the
 //! other ranks wait for it (OpenMPI's waiting polls, so on a machine with as many cores as
 //! ranks the waiting rank takes a little of the time measured).
@@ -727,7 +728,7 @@ impl Study {
             // first variant: an untimed run of the first variant's first level comes first
             // (not when that variant is the curves' reference, which is not on the front).
             let warm_up = out.join("warm_up");
-            if let Some(Err(e)) = self.run_one(petsc, 0, 0, &warm_up)? {
+            if let Some(Err(e)) = self.run_one(petsc, 0, 0, &warm_up, false)? {
                 if !e.is_collective() {
                     return Err(e);
                 }
@@ -747,7 +748,8 @@ impl Study {
                 reset_peak_memory();
                 let ranks = variant.ranks.unwrap_or(job_size);
                 let t0 = Instant::now();
-                let result = self.run_one(petsc, v, level, &run_dir)?;
+                // Unused options are reported once per variant, at its first run.
+                let result = self.run_one(petsc, v, level, &run_dir, level == 0)?;
                 let mut missing_metric = None;
                 let seconds = t0.elapsed().as_secs_f64();
                 // Every rank takes part (-1: not available there).
@@ -1036,13 +1038,15 @@ impl Study {
 
     /// Runs variant `v` at refinement `level` into `run_dir`, with the variant's PETSc options
     /// and on its ranks: `None` on the ranks that wait while it runs on fewer. The error is the
-    /// run's (to record); `Err` only if the variant's options cannot be set.
+    /// run's (to record); `Err` only if the variant's options cannot be set. With
+    /// `report_unused`, the variant's options that nothing read draw a warning.
     fn run_one(
         &self,
         petsc: &Petsc,
         v: usize,
         level: usize,
         run_dir: &Path,
+        report_unused: bool,
     ) -> Result<Option<Result<Summary>>> {
         let ranks = self.variants[v].ranks.unwrap_or(petsc.size());
         let options = crate::petsc::options::Override::set(&self.variant_options[v])?;
@@ -1059,7 +1063,7 @@ impl Study {
             })
         });
         let unused = options.unused();
-        if petsc.rank() == 0 && !unused.is_empty() {
+        if report_unused && petsc.rank() == 0 && !unused.is_empty() {
             eprintln!(
                 "mortar: warning: variant '{}': PETSc option(s) {} not used (a typo, or an \
                  option of a solver not in use)",

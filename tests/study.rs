@@ -637,9 +637,19 @@ petsc = "-pc_type jacobi -ksp_rtol 1e-13 -ksp_max_it 5000 -mat_mumps_icntl_8 77"
         stderr.contains("variant 'one_rank': PETSc option(s) -no_such_option not used"),
         "{stderr}"
     );
+    let warned = |variant: &str| {
+        stderr
+            .matches(&format!("variant '{variant}': PETSc option(s)"))
+            .count()
+    };
     assert!(
         stderr.contains("variant 'gmres': PETSc option(s) -mat_mumps_icntl_8 not used"),
         "{stderr}"
+    );
+    assert_eq!(
+        (warned("one_rank"), warned("gmres")),
+        (1, 1),
+        "once per variant"
     );
     assert!(!stderr.contains("never used"), "{stderr}");
     let s = common::summary(&out);
