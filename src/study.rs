@@ -988,7 +988,7 @@ impl Study {
     fn error_label(&self) -> String {
         match &self.finest_reference {
             Some(reference) => format!(
-                "relative difference of {} to {reference} at h = {}",
+                "{}: rel. diff. to {reference}, h = {:.4}",
                 self.metric,
                 self.refinements[self.finest_level()].h
             ),

@@ -1,4 +1,6 @@
-//! Verification figures against exact solutions (ALGORITHM.md section 9).
+//! Verification figures against exact solutions (ALGORITHM.md section 9), and for every scene
+//! `max_displacement`, the largest nodal displacement (a value to compare runs by where there
+//! is no exact solution).
 //!
 //! # Lamé's thick sphere
 //!
@@ -129,6 +131,13 @@ pub fn local_figures(
     u: &[f64],
 ) -> LocalFigures {
     let mut out = LocalFigures::default();
+    // Every scene: the largest nodal displacement (a cantilever's tip deflection), a value to
+    // compare runs by where there is no exact solution (a study's `finest_reference`).
+    let largest = local_nodes
+        .iter()
+        .map(|&n| Vector3::new(u[3 * n], u[3 * n + 1], u[3 * n + 2]).norm())
+        .fold(0.0, f64::max);
+    out.maxima.push(("max_displacement", largest));
     let Some(v) = &scene.verification else {
         return out;
     };
@@ -284,6 +293,9 @@ pub fn metrics(
     }
     if let Some(d) = maxima.get("rel_stress_error") {
         m.push(("max_rel_stress_error".to_string(), *d));
+    }
+    if let Some(d) = maxima.get("max_displacement") {
+        m.push(("max_displacement".to_string(), *d));
     }
     m
 }

@@ -8,7 +8,9 @@
 //! order estimated from the last three residuals above round-off, log(r3 / r2) / log(r2 / r1),
 //! is at least 1.8 in every step, measured with the load-step predictor off (with it, Newton
 //! needs only 2-4 iterations, too few above round-off for an order estimate);
-//! and the z-reaction equals the analytic homogeneous-compression force: for uniaxial stress
+//! the z-reaction equals the analytic homogeneous-compression force (below); and the summary's
+//! `max_displacement` is the largest nodal displacement of `displacement.csv`, on 1 and 2
+//! ranks. The compression force: for uniaxial stress
 //! with free lateral faces the deformation is homogeneous, F = diag(s, s, 0.7), with s from
 //! P_xx = 0 and the force P_zz x (reference area 1).
 
@@ -158,4 +160,18 @@ count = 6
         .collect();
     let uz = tip.iter().map(|r| r[5]).sum::<f64>() / tip.len() as f64;
     assert!(uz < -3.0, "tip deflection {uz}");
+    // `max_displacement` (every scene's summary) is the largest nodal displacement, on 1 and
+    // 2 ranks alike.
+    let largest = common::displacements(&out)
+        .iter()
+        .map(|r| (r[3] * r[3] + r[4] * r[4] + r[5] * r[5]).sqrt())
+        .fold(0.0, f64::max);
+    let (out2, _) = common::run_case(&case, 2, &["-q"]);
+    for dir in [&out, &out2] {
+        let m = common::metric(dir, "max_displacement");
+        assert!(
+            (m - largest).abs() <= 1e-10 * largest,
+            "{m} against {largest}"
+        );
+    }
 }
