@@ -67,8 +67,8 @@
 //! so a mistake in the last variant is reported at once, not after the first runs. Every run
 //! shares one PETSc: its options are the base case's options file (no variant may change
 //! `petsc_options`), the command line, and the variant's own `petsc` options, set for its runs
-//! only (options a variant sets that no PETSc object reads at its first run draw one warning
-//! naming the variant).
+//! only (options a variant sets that none of its runs reads draw one warning naming the
+//! variant, after its last run).
 //! A variant with `ranks = k` runs on the first k ranks of the job (a split communicator); the
 //! other ranks wait for it (OpenMPI's waiting polls, so on a machine with as many cores as
 //! ranks the waiting rank takes a little of the time measured).
@@ -143,9 +143,10 @@
 //!   more time and no larger error, one of them strictly; errors at or below the study's
 //!   `error_floor` count as equal, and so do wall times within its `time_noise` of each
 //!   other; [`pareto_front`]); variants with `reference_only = true`
-//!   are plotted but not candidates. Without `[curves]` the error is the
-//!   metric (with `finest_reference`, its relative difference to the finest run's); with `[curves]` (no exact solution: the reference variant is the truth) it is a
-//!   variant's `curve_max_rel_diff` at the last level, and the reference is not on the plot.
+//!   are plotted but not candidates. Without `[curves]` the error is the metric (with
+//!   `finest_reference`, its relative difference to the finest run's); with `[curves]` (no
+//!   exact solution: the reference variant is the truth) it is a variant's
+//!   `curve_max_rel_diff` at the last level, and the reference is not on the plot.
 //!   The summary gets `on_front_<variant>_<level>` (1 or 0) and, for the default variant (the
 //!   first with no edits, no `petsc` and no `ranks`: the case file as it is),
 //!   `default_on_front`, the share of its runs on the front; the closing line says it.
@@ -216,10 +217,10 @@ pub struct StudyFile {
     pub expect: Vec<String>,
     /// For a metric that is a value, not an error (a peak pressure, a tip displacement, with no
     /// exact value to compare with): the variant whose run at the finest refinement (the
-    /// smallest h) is the truth. Every other run's error is then `|m - m_ref| / |m_ref|`, its metric's
-    /// relative difference to that run's; the reference run itself has no error (not on the
-    /// plots or the front). One metric, not a list. Not with `[curves]`, whose `reference`
-    /// plays this part. Default: none (the metric is an error).
+    /// smallest h) is the truth. Every other run's error is then `|m - m_ref| / |m_ref|`, its
+    /// metric's relative difference to that run's; the reference run itself has no error (not
+    /// on the plots or the front). One metric, not a list. Not with `[curves]`, whose
+    /// `reference` plays this part. Default: none (the metric is an error).
     pub finest_reference: Option<String>,
 }
 
@@ -728,7 +729,7 @@ impl Study {
             // first variant: an untimed run of the first variant's first level comes first
             // (not when that variant is the curves' reference, which is not on the front).
             let warm_up = out.join("warm_up");
-            if let Some(Err(e)) = self.run_one(petsc, 0, 0, &warm_up, false)? {
+            if let (Some(Err(e)), _) = self.run_one(petsc, 0, 0, &warm_up)? {
                 if !e.is_collective() {
                     return Err(e);
                 }
@@ -739,6 +740,8 @@ impl Study {
         // The curves' columns, checked against the first history written.
         let mut columns_checked = self.curves.is_none();
         for (v, variant) in self.variants.iter().enumerate() {
+            // The variant's options that none of its runs read.
+            let mut unread: Option<BTreeSet<String>> = None;
             for (level, refinement) in self.refinements.iter().enumerate() {
                 let run_dir = out.join("runs").join(&variant.name).join(level.to_string());
                 let stale = run_dir.join("history.csv");
@@ -748,8 +751,11 @@ impl Study {
                 reset_peak_memory();
                 let ranks = variant.ranks.unwrap_or(job_size);
                 let t0 = Instant::now();
-                // Unused options are reported once per variant, at its first run.
-                let result = self.run_one(petsc, v, level, &run_dir, level == 0)?;
+                let (result, unused) = self.run_one(petsc, v, level, &run_dir)?;
+                unread = Some(match unread {
+                    None => unused,
+                    Some(before) => before.intersection(&unused).cloned().collect(),
+                });
                 let mut missing_metric = None;
                 let seconds = t0.elapsed().as_secs_f64();
                 // Every rank takes part (-1: not available there).
@@ -822,6 +828,15 @@ impl Study {
                 if !columns_checked {
                     columns_checked = self.check_columns(petsc, &run_dir)?;
                 }
+            }
+            let unread = unread.unwrap_or_default();
+            if rank == 0 && !unread.is_empty() {
+                eprintln!(
+                    "mortar: warning: variant '{}': PETSc option(s) {} not used by any of its \
+                     runs (a typo, or an option of a solver not in use)",
+                    variant.name,
+                    unread.into_iter().collect::<Vec<_>>().join(", ")
+                );
             }
         }
         // With `finest_reference`, the metrics become errors against the finest run's.
@@ -988,7 +1003,7 @@ impl Study {
     fn error_label(&self) -> String {
         match &self.finest_reference {
             Some(reference) => format!(
-                "{}: rel. diff. to {reference}, h = {:.4}",
+                "rel. diff. of {} to {reference} at h = {:.4e}",
                 self.metric,
                 self.refinements[self.finest_level()].h
             ),
@@ -1038,16 +1053,15 @@ impl Study {
 
     /// Runs variant `v` at refinement `level` into `run_dir`, with the variant's PETSc options
     /// and on its ranks: `None` on the ranks that wait while it runs on fewer. The error is the
-    /// run's (to record); `Err` only if the variant's options cannot be set. With
-    /// `report_unused`, the variant's options that nothing read draw a warning.
+    /// run's (to record); `Err` only if the variant's options cannot be set. Also returns the
+    /// variant's options that nothing read in this run.
     fn run_one(
         &self,
         petsc: &Petsc,
         v: usize,
         level: usize,
         run_dir: &Path,
-        report_unused: bool,
-    ) -> Result<Option<Result<Summary>>> {
+    ) -> Result<(Option<Result<Summary>>, BTreeSet<String>)> {
         let ranks = self.variants[v].ranks.unwrap_or(petsc.size());
         let options = crate::petsc::options::Override::set(&self.variant_options[v])?;
         let result = petsc.on_first_ranks(ranks, || {
@@ -1062,16 +1076,8 @@ impl Study {
                 )
             })
         });
-        let unused = options.unused();
-        if report_unused && petsc.rank() == 0 && !unused.is_empty() {
-            eprintln!(
-                "mortar: warning: variant '{}': PETSc option(s) {} not used (a typo, or an \
-                 option of a solver not in use)",
-                self.variants[v].name,
-                unused.join(", ")
-            );
-        }
-        Ok(result)
+        let unused = options.unused().into_iter().collect();
+        Ok((result, unused))
     }
 
     /// Checks the `[curves]` columns against the `history.csv` in `run_dir` (rank 0), and

@@ -131,7 +131,7 @@ pub fn local_figures(
     u: &[f64],
 ) -> LocalFigures {
     let mut out = LocalFigures::default();
-    // Every scene: the largest nodal displacement (a cantilever's tip deflection), a value to
+    // Every scene: the largest nodal displacement (the size of a cantilever's tip's), a value to
     // compare runs by where there is no exact solution (a study's `finest_reference`).
     let largest = local_nodes
         .iter()
