@@ -863,8 +863,7 @@ impl Study {
                 if reference_failed.is_some() {
                     summary.message.clone_from(&reference_failed);
                 }
-                write_atomic(&out.join("study.csv"), study_csv(&runs).as_bytes())?;
-                summary.write(&out.join("summary.json"))?;
+                // Written with the Pareto front below.
             }
         }
         if self.curves.is_none() {
@@ -1745,12 +1744,18 @@ fn set_in_value(
 mod tests {
     use super::*;
 
-    #[test]
-    fn pareto_front_keeps_the_runs_nothing_beats() {
-        let run = |variant: &str, seconds: f64, error: Option<f64>, converged: bool| RunRecord {
+    /// A run of `variant` at `level` (h = 1 / (level + 1)) with these figures, the rest zero.
+    fn record(
+        variant: &str,
+        level: usize,
+        seconds: f64,
+        error: Option<f64>,
+        converged: bool,
+    ) -> RunRecord {
+        RunRecord {
             variant: variant.into(),
-            level: 0,
-            h: 1.0,
+            level,
+            h: 1.0 / (level + 1) as f64,
             ranks: 1,
             error,
             seconds,
@@ -1760,6 +1765,13 @@ mod tests {
             converged,
             on_front: false,
             message: None,
+        }
+    }
+
+    #[test]
+    fn pareto_front_keeps_the_runs_nothing_beats() {
+        let run = |variant: &str, seconds: f64, error: Option<f64>, converged: bool| {
+            record(variant, 0, seconds, error, converged)
         };
         let runs = vec![
             run("fast_coarse", 1.0, Some(1e-2), true),
@@ -1790,19 +1802,8 @@ mod tests {
     /// failed or its metric is 0; the metrics as they were are returned.
     #[test]
     fn errors_against_the_finest_run() {
-        let run = |variant: &str, level: usize, value: f64, converged: bool| RunRecord {
-            variant: variant.into(),
-            level,
-            h: 1.0 / (level + 1) as f64,
-            ranks: 1,
-            error: Some(value),
-            seconds: 1.0,
-            newton_its: 0,
-            augmentations: 0,
-            peak_memory_mb: None,
-            converged,
-            on_front: false,
-            message: None,
+        let run = |variant: &str, level: usize, value: f64, converged: bool| {
+            record(variant, level, 1.0, Some(value), converged)
         };
         let study = || {
             vec![
