@@ -158,7 +158,8 @@ use crate::contact::search::{Aabb, PrimaryTree};
 use crate::contact::tying::Augmented;
 use crate::dofs::DofMap;
 use crate::error::Result;
-use crate::fe::{face_normal, FaceType};
+use crate::fe::shape::{cross_at as cross, normal_from_tangents, tangents_from_grad};
+use crate::fe::FaceType;
 use crate::mesh::FaceRef;
 use crate::petsc::log::Section;
 use crate::petsc::{Matrix, PetscInt, Sparsity, Vector};
@@ -221,6 +222,9 @@ pub struct NodeState {
 pub struct NodeFields {
     /// `a_A` (0 without overlap).
     pub area: f64,
+    /// The full integral of A's traction function over the current secondary faces around
+    /// it (mortar nodes with traction; the reference one for node-on-segment; 0 otherwise).
+    pub full_area: f64,
     /// Normalized gap `gh_A` (positive in penetration; 0 without overlap).
     pub gap: f64,
     /// Contact pressure `p_A >= 0`.
@@ -250,6 +254,10 @@ pub struct ContactPass {
     pub nodes: Vec<usize>,
     /// Per secondary face: the index into `nodes` of its k-th traction node.
     carriers: Vec<Vec<usize>>,
+    /// Per traction node: the secondary faces carrying it, with its index `k` in each.
+    node_faces: Vec<Vec<(usize, usize)>>,
+    /// The traction scheme of the faces' carriers.
+    carrier_scheme: TractionScheme,
     /// Per traction node. The multipliers and history (`history`, `gap_old`, `segment_old`)
     /// are kept only by the rank holding the node; elsewhere they stay as they started. (The
     /// node-on-segment pattern reads `segment_old` on every rank: a row owned by another rank
@@ -615,6 +623,7 @@ impl ContactInterfaces {
             v[6..9].copy_from_slice(&f.traction_t);
             v[9..12].copy_from_slice(&f.normal);
             v[12] = f.status as f64;
+            v[13] = f.full_area;
         }
         let mut all = vec![0.0; flat.len()];
         world.all_reduce_into(&flat[..], &mut all[..], SystemOperation::sum());
@@ -627,6 +636,7 @@ impl ContactInterfaces {
                 traction_t: [v[6], v[7], v[8]],
                 normal: [v[9], v[10], v[11]],
                 status: v[12] as u8,
+                full_area: v[13],
                 weighted_gap: [0.0; 3],
                 segment: None,
             })
@@ -836,7 +846,8 @@ impl ContactInterfaces {
                 if f.area <= 0.0 && st.history.lambda_n == 0.0 {
                     continue;
                 }
-                let prm = pass.law_params(st, iface.mu, iface.penalty_scale, f.area);
+                let coverage = coverage_scale(f.area, f.full_area).unwrap_or(1.0);
+                let prm = pass.law_params(st, iface.mu, iface.penalty_scale, coverage);
                 let dsh = if iface.mu > 0.0 { f.slip } else { [0.0; 3] };
                 let new = if f.area > 0.0 {
                     uzawa_update(&st.history, &prm, f.normal, f.gap, dsh)
@@ -992,6 +1003,12 @@ impl ContactPass {
             .collect();
         let (a_full, sizes) =
             full_integrals(scene, carrier_scheme, &sec_faces, &carriers, nodes.len());
+        let mut node_faces = vec![Vec::new(); nodes.len()];
+        for (f, car) in carriers.iter().enumerate() {
+            for (k, &a) in car.iter().enumerate() {
+                node_faces[a].push((f, k));
+            }
+        }
         let state = nodes
             .iter()
             .zip(a_full.iter().zip(&sizes))
@@ -1041,6 +1058,8 @@ impl ContactPass {
             pri_faces,
             nodes,
             carriers,
+            node_faces,
+            carrier_scheme,
             state,
             local_faces,
             held,
@@ -1052,15 +1071,36 @@ impl ContactPass {
         })
     }
 
-    /// The law's parameters at a node whose overlap integral is `area`: the node's penalties
-    /// times the interface's growth factor `scale` and the node's [`coverage_scale`].
-    fn law_params(&self, st: &NodeState, mu: f64, scale: f64, area: f64) -> LawParams {
-        let scale = scale * coverage_scale(area, st.a_full).unwrap_or(1.0);
+    /// The law's parameters at a node: its penalties times the interface's growth factor
+    /// `scale` and the node's [`coverage_scale`] `coverage` (1 for a covered node).
+    fn law_params(&self, st: &NodeState, mu: f64, scale: f64, coverage: f64) -> LawParams {
+        let scale = scale * coverage;
         LawParams {
             eps_n: st.eps_n * scale,
             eps_t: st.eps_t * scale,
             mu,
         }
+    }
+
+    /// The full integral of traction node `a`'s function over the secondary faces carrying
+    /// it at positions `x` ([`traction_integrals`]), with its gradient if asked.
+    fn full_integral(&self, x: &[[f64; 3]], a: usize, gradient: bool) -> FullIntegral {
+        let mut full = FullIntegral {
+            value: 0.0,
+            gradient: Vec::new(),
+        };
+        for &(f, k) in &self.node_faces[a] {
+            let face = &self.sec_faces[f];
+            let xf: Vec<[f64; 3]> = face.nodes.iter().map(|&n| x[n]).collect();
+            let integrals = traction_integrals(face.kind, self.carrier_scheme, &xf, gradient);
+            full.value += integrals.value[k];
+            if gradient {
+                let per_node = &integrals.gradient[k * xf.len()..(k + 1) * xf.len()];
+                full.gradient
+                    .extend(face.nodes.iter().copied().zip(per_node.iter().copied()));
+            }
+        }
+        full
     }
 
     /// Nodal normals of the secondary surface at positions `x`.
@@ -1204,7 +1244,7 @@ impl ContactPass {
         };
         let law = NodeLaw {
             history: &st.history,
-            params: self.law_params(st, ctx.iface_mu, ctx.scale, st.a_full),
+            params: self.law_params(st, ctx.iface_mu, ctx.scale, 1.0),
             touch: TOUCH_TOLERANCE * st.h,
             area: st.a_full,
             stick_all: ctx.stick_all,
@@ -1214,6 +1254,7 @@ impl ContactPass {
         };
         let fields = NodeFields {
             area: st.a_full,
+            full_area: st.a_full,
             gap: c.gh,
             pressure: c.pressure,
             slip: c.slip,
@@ -1411,12 +1452,14 @@ impl ContactPass {
             normal: nu,
             ..Default::default()
         };
-        if kin.area < MIN_COVERAGE * st.a_full {
+        let full = self.full_integral(ctx.x, a, tangent);
+        if kin.area < MIN_COVERAGE * full.value {
             return (None, fields);
         }
         let area = kin.area;
         let gh = dot(nu, kin.gap) / area;
-        let prm = self.law_params(st, ctx.iface_mu, ctx.scale, area);
+        let coverage = coverage_scale(area, full.value);
+        let prm = self.law_params(st, ctx.iface_mu, ctx.scale, coverage.unwrap_or(1.0));
         let (p, dp_dgh) =
             normal_pressure_touching(st.history.lambda_n, prm.eps_n, gh, TOUCH_TOLERANCE * st.h);
         let slip_history = ctx.iface_mu > 0.0 && st.gap_old.is_some();
@@ -1445,6 +1488,7 @@ impl ContactPass {
         let t: [f64; 3] = std::array::from_fn(|c| p * nu[c] + fr.traction[c]);
         fields = NodeFields {
             area,
+            full_area: full.value,
             gap: gh,
             pressure: p,
             slip: tangential(dsh, nu),
@@ -1462,6 +1506,9 @@ impl ContactPass {
             return (None, fields);
         }
         let mut block = Slots::new(self, normals, node, terms);
+        if coverage.is_some() && tangent {
+            block.include(full.gradient.iter().map(|g| g.0));
+        }
         block.add_forces(self, terms, t);
         if tangent {
             let lin = Linearization {
@@ -1471,7 +1518,7 @@ impl ContactPass {
                 gh,
                 p,
                 dp_dgh,
-                coverage_scaled: coverage_scale(area, st.a_full).is_some(),
+                coverage: coverage.is_some().then_some(&full),
                 dsh,
                 friction: (ctx.iface_mu > 0.0).then_some(&fr),
                 slip_history,
@@ -1490,9 +1537,9 @@ struct Linearization<'a> {
     gh: f64,
     p: f64,
     dp_dgh: f64,
-    /// The penalties carry the coverage scale `s = a_full / a`, whose derivative
-    /// `ds = -s da / a` then enters `d (eps gh)` and `d (eps_t dsh)`.
-    coverage_scaled: bool,
+    /// The full integral when the penalties carry the coverage scale `s = a_full / a`, whose
+    /// derivative `ds / s = d a_full / a_full - da / a` enters `d (eps gh)` and `d (eps_t dsh)`.
+    coverage: Option<&'a FullIntegral>,
     dsh: [f64; 3],
     /// The return map's result and derivatives (friction only).
     friction: Option<&'a FrictionResult>,
@@ -1529,6 +1576,14 @@ impl Slots {
             force: vec![0.0; n],
             tangent: Vec::new(),
         }
+    }
+
+    /// Adds slots for `nodes` (before any force or tangent is added).
+    fn include(&mut self, nodes: impl Iterator<Item = usize>) {
+        self.nodes.extend(nodes);
+        self.nodes.sort_unstable();
+        self.nodes.dedup();
+        self.force = vec![0.0; 3 * self.nodes.len()];
     }
 
     fn slot(&self, node: usize) -> usize {
@@ -1641,17 +1696,29 @@ impl Slots {
             }
             columns.push(cols);
         }
-        // d gh and d p. With the coverage scale, the law's input is in effect `s gh` and
-        // `d (s gh) = s (dgh - gh da / a)`: the `da` term counts twice (`dp_dgh` holds `s`).
-        let da_terms = if lin.coverage_scaled { 2.0 } else { 1.0 };
+        // The coverage scale's `ds / s` (zero without it): the law's inputs are in effect
+        // `s gh` and `s dsh`, and `dp_dgh`, `dt_T/d dsh` already hold `s`.
+        let mut ds_over_s = vec![0.0; n];
+        if let Some(full) = lin.coverage {
+            for &(b, g) in &full.gradient {
+                let s = self.slot(b);
+                for c in 0..3 {
+                    ds_over_s[3 * s + c] += g[c] / full.value;
+                }
+            }
+            for (d, a) in ds_over_s.iter_mut().zip(&da) {
+                *d -= a / lin.area;
+            }
+        }
+        // d gh and d p.
         let dp: Vec<f64> = (0..n)
             .map(|col| {
                 let dgh = ((0..3)
                     .map(|i| lin.nu[i] * dg[i][col] + lin.gap[i] * dnu[i][col])
                     .sum::<f64>()
-                    - da_terms * lin.gh * da[col])
+                    - lin.gh * da[col])
                     / lin.area;
-                lin.dp_dgh * dgh
+                lin.dp_dgh * (dgh + lin.gh * ds_over_s[col])
             })
             .collect();
         // d t = nu d p + p d nu + d t_T.
@@ -1666,7 +1733,8 @@ impl Slots {
             for col in 0..n {
                 let ddsh: [f64; 3] = if lin.slip_history {
                     std::array::from_fn(|i| {
-                        -(dgt[i][col] + da_terms * lin.dsh[i] * da[col]) / lin.area
+                        -(dgt[i][col] + lin.dsh[i] * da[col]) / lin.area
+                            + lin.dsh[i] * ds_over_s[col]
                     })
                 } else {
                     [0.0; 3]
@@ -1757,9 +1825,8 @@ fn dense_values(
 }
 
 /// `a_full` of every traction node (the integral of its traction function over every
-/// secondary face, reference configuration, per sub-segment so that scheme 3's piecewise
-/// functions are integrated exactly) and `h_A` (the mean square root of the areas of the faces
-/// around it).
+/// secondary face, reference configuration) and `h_A` (the mean square root of the areas of
+/// the faces around it).
 fn full_integrals(
     scene: &Scene,
     scheme: TractionScheme,
@@ -1769,25 +1836,12 @@ fn full_integrals(
 ) -> (Vec<f64>, Vec<f64>) {
     let mut a = vec![0.0; count];
     let (mut size_sum, mut size_count) = (vec![0.0; count], vec![0.0; count]);
-    let mut phi = Vec::new();
     for (f, car) in faces.iter().zip(carriers) {
         let x: Vec<[f64; 3]> = f.nodes.iter().map(|&n| scene.mesh.coords[n]).collect();
-        let mut face_area = 0.0;
-        for seg in sub_segments(f.kind) {
-            let rule = seg.linear_kind().quadrature(6);
-            let jac = seg.parent_jacobian();
-            for (q, w) in rule.points.iter().zip(&rule.weights) {
-                let xi = seg.to_parent(*q);
-                let (_, j_face) = face_normal(f.kind, &x, xi);
-                traction_shape_on(f.kind, scheme, &seg, xi, &mut phi);
-                face_area += w * jac * j_face;
-                for (k, &node) in car.iter().enumerate() {
-                    a[node] += w * jac * j_face * phi[k];
-                }
-            }
-        }
-        for &node in car {
-            size_sum[node] += face_area.sqrt();
+        let integrals = traction_integrals(f.kind, scheme, &x, false);
+        for (k, &node) in car.iter().enumerate() {
+            a[node] += integrals.value[k];
+            size_sum[node] += integrals.area.sqrt();
             size_count[node] += 1.0;
         }
     }
@@ -1797,6 +1851,77 @@ fn full_integrals(
         .map(|(s, c)| s / c)
         .collect();
     (a, h)
+}
+
+/// The full integral of one traction node over the current faces carrying it.
+struct FullIntegral {
+    value: f64,
+    /// `(node, d value / d x_node)`, one entry per node of each face (a node shared by faces
+    /// appears once per face).
+    gradient: Vec<(usize, [f64; 3])>,
+}
+
+/// The integrals of a face's traction functions over the whole face at node positions `x`.
+struct TractionIntegrals {
+    /// The face's area.
+    area: f64,
+    /// `int Phi_k dA` for the face's k-th traction node.
+    value: Vec<f64>,
+    /// With the gradient: `d value[k] / d x_b` at `k * x.len() + b` (empty without).
+    gradient: Vec<[f64; 3]>,
+}
+
+/// [`TractionIntegrals`] of a face: per sub-segment, so that scheme 3's piecewise functions
+/// are integrated exactly, with a degree-6 rule. With `gradient`, also the derivatives with
+/// respect to the face's node coordinates: `J = |x_,xi x x_,eta|` varies as
+/// `dJ = (x_,eta x n) . dx_,xi + (n x x_,xi) . dx_,eta`, `dx_,i = sum_b N_b,i dx_b`.
+fn traction_integrals(
+    kind: FaceType,
+    scheme: TractionScheme,
+    x: &[[f64; 3]],
+    gradient: bool,
+) -> TractionIntegrals {
+    let mut out = TractionIntegrals {
+        area: 0.0,
+        value: Vec::new(),
+        gradient: Vec::new(),
+    };
+    let mut phi = Vec::new();
+    let mut dn = vec![[0.0; 2]; x.len()];
+    for seg in sub_segments(kind) {
+        let rule = seg.linear_kind().quadrature(6);
+        let jac = seg.parent_jacobian();
+        for (q, w) in rule.points.iter().zip(&rule.weights) {
+            let xi = seg.to_parent(*q);
+            kind.shape_grad(xi, &mut dn);
+            let (t1, t2) = tangents_from_grad(x, &dn);
+            let (n, j_face) = normal_from_tangents(t1, t2);
+            traction_shape_on(kind, scheme, &seg, xi, &mut phi);
+            if out.value.is_empty() {
+                out.value = vec![0.0; phi.len()];
+                if gradient {
+                    out.gradient = vec![[0.0; 3]; phi.len() * x.len()];
+                }
+            }
+            out.area += w * jac * j_face;
+            for (k, &phi_k) in phi.iter().enumerate() {
+                out.value[k] += w * jac * j_face * phi_k;
+            }
+            if gradient {
+                let (a1, a2) = (cross(t2, n), cross(n, t1));
+                for (b, g) in dn.iter().enumerate() {
+                    let dj: [f64; 3] = std::array::from_fn(|c| g[0] * a1[c] + g[1] * a2[c]);
+                    for (k, &phi_k) in phi.iter().enumerate() {
+                        let slot = &mut out.gradient[k * x.len() + b];
+                        for c in 0..3 {
+                            slot[c] += w * jac * phi_k * dj[c];
+                        }
+                    }
+                }
+            }
+        }
+    }
+    out
 }
 
 /// The ranks that share the contact work of pass `pass` of `passes`: the passes of an
