@@ -37,30 +37,37 @@
 //! growth factor (1 unless `penalty_growth` is set). `h_A` is a face size, not the node's share
 //! of the surface (`sqrt(a_full_A)`, which is half as large at an edge and a quarter at a
 //! corner): a penalty that varies from node to node on a uniform mesh turns a uniform
-//! penetration into a non-uniform pressure and fails the penalty patch test. `a_full_A` is the
-//! integral of A's traction function over the whole secondary surface.
+//! penetration into a non-uniform pressure and fails the penalty patch test.
 //!
-//! **Coverage scale** `s_A = a_full_A / a_A` for a partially covered node (`a_A < a_full_A`, at
-//! the edge of the primary surface), 1 otherwise ([`coverage_scale`]). The node's force is
-//! `a_A t_A`, so without the scale a node covered by a fraction `c` of its support resists its
-//! penetration (and its slip) with `c` times the stiffness of a covered node, and its Uzawa
-//! update moves its force by `c` times as much: measured on the paper's case 4 (sliding
-//! blocks, Hex8), the slowest nodes, 19-25 % covered along the upper cube's edge, lost 30-40 %
-//! of their violation per augmentation, and 13 of 50 steps needed more than 5 augmentations. With the scale every node's penalty force per unit normalized gap is
-//! that of a covered node. Fully covered nodes (the patch tests) are unchanged, and the
-//! converged Uzawa solution is the same (the scale changes the regularization, not the
-//! constraint). `s_A` depends on the geometry through `a_A`: `d s = -s d a / a` enters the
-//! tangent below.
+//! **Coverage.** `a_full_A` is the integral of A's traction function over the secondary faces
+//! carrying A in the current configuration (`traction_integrals`, with its derivative), and
+//! `c_A = a_A / a_full_A` the node's coverage: 1 for a node whose faces the primary surface
+//! covers whole (up to the quadrature of the pallets, whatever the strain of the surface), less
+//! at the edge of the primary surface.
 //!
-//! A node whose overlap is below [`MIN_COVERAGE`] (5 %) of its full integral carries no traction
-//! (ALGORITHM.md section 10: a node sliding off the edge of the primary surface has `a_A -> 0`,
-//! and `1 / a_A` in `gh_A` and its derivative would be unbounded). The threshold also bounds
-//! the coverage scale at 20. A sliver below it cannot be enforced in a few augmentations
-//! anyway: on case 4 a node 0.3 % covered held 50 times the mean pressure after 10
-//! augmentations with the scale capped at 100, while its mean gap fell by 5-10 % per
-//! augmentation (the edge of the primary body must be bent to close it). The cost: the force
-//! of a node leaving contact drops from `a_A p_A` at 5 % coverage to 0 in one step (the
-//! smoothness figures of the paper's Figure 7 cases did not change, `cases/sliding_blocks`).
+//! **Coverage scale** `s_A = 1 / c_A` for a partly covered node, 1 otherwise
+//! ([`coverage_scale`]). The node's force is `a_A t_A`, so without the scale a node covered by a
+//! fraction `c` of its support resists its penetration (and its slip) with `c` times the
+//! stiffness of a covered node, and its Uzawa update moves its force by `c` times as much:
+//! measured on the paper's case 4 (sliding blocks, Hex8), the slowest nodes, 19-25 % covered
+//! along the upper cube's edge, lost 30-40 % of their violation per augmentation, and 13 of 50
+//! steps needed more than 5 augmentations. With the scale every node's penalty force per unit
+//! normalized gap is that of a covered node. Covered nodes (the patch tests) are unchanged,
+//! and the Uzawa solution of the nodes held to the tolerances is the same (the scale changes
+//! the regularization, not the constraint). `s_A` depends on the geometry:
+//! `d s / s = d a_full / a_full - d a / a` enters the tangent below.
+//!
+//! **Nodes sliding off.** A node below [`MIN_COVERAGE`] (5 %) carries no traction (ALGORITHM.md
+//! section 10: as a node slides off the edge of the primary surface `a_A -> 0`, and `1 / a_A`
+//! in `gh_A` and its derivative would be unbounded); the threshold also bounds the scale at 20.
+//! Between 5 % and [`FADE_COVERAGE`] (10 %) the node's traction is multiplied by a smooth step
+//! from 0 to 1 ([`coverage_fade`]), so that its force vanishes smoothly (with its derivative)
+//! as it slides off or appears as it slides on; such a node takes no Uzawa update (it keeps its
+//! multipliers) and is not held to the tolerances. Slivers cannot be enforced in a few
+//! augmentations anyway: on case 4 a node 0.3 % covered held 50 times the mean pressure after
+//! 10 augmentations with the scale capped at 100, while its mean gap fell by 5-10 % per
+//! augmentation (the edge of the primary body must be bent to close it). A sliver's
+//! penetration is held by its covered neighbours.
 //!
 //! # Consistent tangent
 //!
@@ -70,15 +77,17 @@
 //! d a    = sum_B d n1_AB
 //! d g    = sum_B (d n1_AB x_B + n1_AB d x_B) - sum_C (d n2_AC x_C + n2_AC d x_C)
 //! d gh   = (nu . d g + g . d nu) / a - gh d a / a
-//! d p    = (dp/dgh) (d gh - c gh d a / a)
+//! d p    = (dp/dgh) (d gh + gh d s / s)
 //! d dsh  = -(d gt + dsh d a) / a,   d gt = sum_B d n1_AB x_B^n - sum_C d n2_AC x_C^n
-//! d t_T  = (dt_T/d dsh) (d dsh - c dsh d a / a) + (dt_T/dp) d p + (dt_T/d nu) d nu
+//! d t_T  = (dt_T/d dsh) (d dsh + dsh d s / s) + (dt_T/dp) d p + (dt_T/d nu) d nu
 //! d t    = nu d p + p d nu + d t_T
-//! d F_B  = sum_A (d n1_AB t_A + n1_AB d t_A),    d F_C = -sum_A (d n2_AC t_A + n2_AC d t_A)
+//! d F_B  = sum_A (d n1_AB r t_A + n1_AB d (r t_A)),   d F_C likewise with -n2_AC
+//! d (r t) = r d t - t (dr/dc) c d s / s
 //! ```
 //!
-//! with `c = 1` for a coverage-scaled node and 0 otherwise (the law depends on `eps_N gh` and
-//! `eps_T dsh`, and `d eps / eps = d s / s = -d a / a`), `d n1`, `d n2` from
+//! with `d s / s = d a_full / a_full - d a / a` for a coverage-scaled node and 0 otherwise (the
+//! law depends on `eps_N gh` and `eps_T dsh`, and `d eps / eps = d s / s`), `r` the fade
+//! factor (1 for most nodes), `d n1`, `d n2` from
 //! [`crate::contact::mortar::integrate_pair_linearized`] (forward-mode
 //! automatic differentiation of the pair kernel), `d nu` from the nodal normals' exact
 //! derivative, and the law's derivatives from `contact::law`. Friction makes it nonsymmetric.
@@ -90,7 +99,10 @@
 //! the violation of a node, relative to `h_A`, is the size of the normal update in gap units,
 //! `|d lambda_N| / eps_N` (the penetration of a pressed node, the multiplier an open node still
 //! holds), and the slip `|dsh_A|` of a sticking node (ALGORITHM.md section 4; a slipping node has
-//! no tangential constraint to meet). Solves repeat while a penetration is above `uzawa_tol`
+//! no tangential constraint to meet). A node without traction (no overlap, or coverage below
+//! [`MIN_COVERAGE`]) has its multipliers released without counting a violation (they exert
+//! no force whatever their value); a fading node keeps them and counts none. Solves repeat
+//! while a penetration is above `uzawa_tol`
 //! or a slip above `uzawa_slip_tol` (both relative to `h_A`; the slip tolerance is looser
 //! because with the soft default tangential penalty each update removes only part of a
 //! sticking node's slip), at most `uzawa_max` times per step. With
@@ -166,14 +178,29 @@ use crate::petsc::{Matrix, PetscInt, Sparsity, Vector};
 
 /// A node carries traction only if its overlap integral `a_A` is at least this fraction of its
 /// full integral `a_full_A` (its coverage). It also bounds the coverage scaling of the
-/// penalties ([`coverage_scale`]) at `1 / MIN_COVERAGE = 20`.
-pub const MIN_COVERAGE: f64 = 0.05;
+/// penalties ([`coverage_scale`]) at `1 / MIN_COVERAGE`.
+pub const MIN_COVERAGE: f64 = 1e-3;
 
-/// The factor `s_A = a_full_A / a_A` by which the penalties of a partially covered node are
-/// multiplied, `None` for a node at least fully covered (`a_A >= a_full_A`: factor 1). With
-/// it, the penalty *force* of a node per unit normalized gap, `a_A s_A eps`, is that of a fully
-/// covered node whatever its coverage (module docs, "Penalties"). Called for nodes with
-/// `a_A >= MIN_COVERAGE a_full_A`, so `s_A <= 1 / MIN_COVERAGE`.
+/// Between [`MIN_COVERAGE`] and this coverage a node's traction fades out
+/// ([`coverage_fade`]); such a node takes no Uzawa update and is not held to the tolerances.
+pub const FADE_COVERAGE: f64 = 0.05;
+
+/// The factor `r` on the traction of a node of coverage `c`, with `dr/dc`: 0 below
+/// [`MIN_COVERAGE`], 1 from [`FADE_COVERAGE`] on, and the smooth step `u^2 (3 - 2 u)`,
+/// `u = (c - MIN_COVERAGE) / (FADE_COVERAGE - MIN_COVERAGE)`, between (continuous with its
+/// first derivative, so that a node's force vanishes smoothly as it slides off).
+pub fn coverage_fade(coverage: f64) -> (f64, f64) {
+    let width = FADE_COVERAGE - MIN_COVERAGE;
+    let u = ((coverage - MIN_COVERAGE) / width).clamp(0.0, 1.0);
+    (u * u * (3.0 - 2.0 * u), 6.0 * u * (1.0 - u) / width)
+}
+
+/// The factor `s_A = a_full_A / a_A` by which the penalties of a partly covered node are
+/// multiplied (`a_full_A` over the current faces carrying A), `None` for a node at least fully
+/// covered (`a_A >= a_full_A`: factor 1). With it, the penalty *force* of a node per unit
+/// normalized gap, `a_A s_A eps`, is that of a fully covered node whatever its coverage
+/// (module docs, "Coverage scale"). Called for nodes with `a_A >= MIN_COVERAGE a_full_A`, so
+/// `s_A <= 1 / MIN_COVERAGE`.
 pub fn coverage_scale(area: f64, a_full: f64) -> Option<f64> {
     (area > 0.0 && area < a_full).then(|| a_full / area)
 }
@@ -846,13 +873,18 @@ impl ContactInterfaces {
                 if f.area <= 0.0 && st.history.lambda_n == 0.0 {
                     continue;
                 }
+                if f.area > 0.0 && f.area < FADE_COVERAGE * f.full_area {
+                    // Fading out (or in): no constraint to meet, the multipliers are kept.
+                    continue;
+                }
                 let coverage = coverage_scale(f.area, f.full_area).unwrap_or(1.0);
                 let prm = pass.law_params(st, iface.mu, iface.penalty_scale, coverage);
                 let dsh = if iface.mu > 0.0 { f.slip } else { [0.0; 3] };
                 let new = if f.area > 0.0 {
                     uzawa_update(&st.history, &prm, f.normal, f.gap, dsh)
                 } else {
-                    // No overlap: nothing to enforce; the multipliers are released.
+                    // No overlap, or below MIN_COVERAGE: nothing to enforce and no traction
+                    // whatever the multipliers, which are released.
                     NodeHistory {
                         lambda_n: 0.0,
                         lambda_t: [0.0; 3],
@@ -860,9 +892,14 @@ impl ContactInterfaces {
                     }
                 };
                 // Normal: the size of the multiplier update in gap units (the penetration of a
-                // pressed node, the released multiplier of an open one). Tangential: the slip of
-                // a sticking node (a slipping node has no slip constraint).
-                let dn = (new.lambda_n - st.history.lambda_n).abs() / prm.eps_n;
+                // pressed node, the released multiplier of an open one; 0 for a node without
+                // traction). Tangential: the slip of a sticking node (a slipping node has no
+                // slip constraint).
+                let dn = if f.area > 0.0 {
+                    (new.lambda_n - st.history.lambda_n).abs() / prm.eps_n
+                } else {
+                    0.0
+                };
                 let dt = if iface.mu > 0.0 && f.status == 1 {
                     norm(&f.slip)
                 } else {
@@ -1092,7 +1129,8 @@ impl ContactPass {
         for &(f, k) in &self.node_faces[a] {
             let face = &self.sec_faces[f];
             let xf: Vec<[f64; 3]> = face.nodes.iter().map(|&n| x[n]).collect();
-            let integrals = traction_integrals(face.kind, self.carrier_scheme, &xf, gradient);
+            let integrals =
+                traction_integrals(face.kind, self.carrier_scheme, &xf, gradient, |_, _| {});
             full.value += integrals.value[k];
             if gradient {
                 let per_node = &integrals.gradient[k * xf.len()..(k + 1) * xf.len()];
@@ -1457,6 +1495,7 @@ impl ContactPass {
             return (None, fields);
         }
         let area = kin.area;
+        let (fade, dfade) = coverage_fade(area / full.value);
         let gh = dot(nu, kin.gap) / area;
         let coverage = coverage_scale(area, full.value);
         let prm = self.law_params(st, ctx.iface_mu, ctx.scale, coverage.unwrap_or(1.0));
@@ -1490,9 +1529,9 @@ impl ContactPass {
             area,
             full_area: full.value,
             gap: gh,
-            pressure: p,
+            pressure: fade * p,
             slip: tangential(dsh, nu),
-            traction_t: fr.traction,
+            traction_t: fr.traction.map(|v| fade * v),
             normal: nu,
             status: match fr.status {
                 Status::Open => 0,
@@ -1509,7 +1548,8 @@ impl ContactPass {
         if coverage.is_some() && tangent {
             block.include(full.gradient.iter().map(|g| g.0));
         }
-        block.add_forces(self, terms, t);
+        let applied = t.map(|v| fade * v);
+        block.add_forces(self, terms, applied);
         if tangent {
             let lin = Linearization {
                 nu,
@@ -1519,11 +1559,12 @@ impl ContactPass {
                 p,
                 dp_dgh,
                 coverage: coverage.is_some().then_some(&full),
+                fade: (fade < 1.0).then_some((fade, dfade, t)),
                 dsh,
                 friction: (ctx.iface_mu > 0.0).then_some(&fr),
                 slip_history,
             };
-            block.add_tangent(self, ctx, normals, node, terms, &lin, t);
+            block.add_tangent(self, ctx, normals, node, terms, &lin, applied);
         }
         (Some(block.into_block()), fields)
     }
@@ -1540,6 +1581,9 @@ struct Linearization<'a> {
     /// The full integral when the penalties carry the coverage scale `s = a_full / a`, whose
     /// derivative `ds / s = d a_full / a_full - da / a` enters `d (eps gh)` and `d (eps_t dsh)`.
     coverage: Option<&'a FullIntegral>,
+    /// A fading node ([`coverage_fade`]): `r`, `dr/dc` and the traction before the factor,
+    /// `t`; the force is `r t`, and `d (r t) = r dt + t dr`, `dc = -c ds / s`.
+    fade: Option<(f64, f64, [f64; 3])>,
     dsh: [f64; 3],
     /// The return map's result and derivatives (friction only).
     friction: Option<&'a FrictionResult>,
@@ -1748,6 +1792,15 @@ impl Slots {
                 }
             }
         }
+        // A fading node: d (r t) = r dt + t (dr/dc) dc, with dc / c = -ds / s.
+        if let Some((r, dr_dc, t_full)) = lin.fade {
+            let c = lin.coverage.map_or(1.0, |full| lin.area / full.value);
+            for (row, ti) in dt.iter_mut().zip(t_full) {
+                for (v, dlog_s) in row.iter_mut().zip(&ds_over_s) {
+                    *v = r * *v - ti * dr_dc * c * dlog_s;
+                }
+            }
+        }
         // d F_B = d n1_AB t + n1_AB d t, d F_C = -(d n2_AC t + n2_AC d t).
         self.tangent = vec![0.0; n * n];
         for (&(pair, k), cols) in terms.iter().zip(&columns) {
@@ -1838,9 +1891,10 @@ fn full_integrals(
     let (mut size_sum, mut size_count) = (vec![0.0; count], vec![0.0; count]);
     for (f, car) in faces.iter().zip(carriers) {
         let x: Vec<[f64; 3]> = f.nodes.iter().map(|&n| scene.mesh.coords[n]).collect();
-        let integrals = traction_integrals(f.kind, scheme, &x, false);
-        for (k, &node) in car.iter().enumerate() {
-            a[node] += integrals.value[k];
+        // Summed point by point into `a` (the node-on-segment baseline, whose path is
+        // sensitive to round-off, normalizes its gaps by these values).
+        let integrals = traction_integrals(f.kind, scheme, &x, false, |k, v| a[car[k]] += v);
+        for &node in car {
             size_sum[node] += integrals.area.sqrt();
             size_count[node] += 1.0;
         }
@@ -1875,11 +1929,13 @@ struct TractionIntegrals {
 /// are integrated exactly, with a degree-6 rule. With `gradient`, also the derivatives with
 /// respect to the face's node coordinates: `J = |x_,xi x x_,eta|` varies as
 /// `dJ = (x_,eta x n) . dx_,xi + (n x x_,xi) . dx_,eta`, `dx_,i = sum_b N_b,i dx_b`.
+/// `add(k, v)` also receives every quadrature point's term `v` of `value[k]`.
 fn traction_integrals(
     kind: FaceType,
     scheme: TractionScheme,
     x: &[[f64; 3]],
     gradient: bool,
+    mut add: impl FnMut(usize, f64),
 ) -> TractionIntegrals {
     let mut out = TractionIntegrals {
         area: 0.0,
@@ -1905,7 +1961,9 @@ fn traction_integrals(
             }
             out.area += w * jac * j_face;
             for (k, &phi_k) in phi.iter().enumerate() {
-                out.value[k] += w * jac * j_face * phi_k;
+                let v = w * jac * j_face * phi_k;
+                out.value[k] += v;
+                add(k, v);
             }
             if gradient {
                 let (a1, a2) = (cross(t2, n), cross(n, t1));
@@ -2000,7 +2058,103 @@ fn tangential(v: [f64; 3], nu: [f64; 3]) -> [f64; 3] {
 
 #[cfg(test)]
 mod tests {
-    use super::{deal_in_strips, pass_ranks};
+    use super::{
+        coverage_fade, deal_in_strips, pass_ranks, traction_integrals, FADE_COVERAGE, MIN_COVERAGE,
+    };
+    use crate::contact::mortar::TractionScheme;
+    use crate::fe::FaceType;
+
+    /// The fade is 0 up to MIN_COVERAGE, 1 from FADE_COVERAGE on, increasing between, with a
+    /// continuous derivative that matches central differences (and is 0 at both ends).
+    #[test]
+    fn coverage_fade_is_a_smooth_step() {
+        assert_eq!(coverage_fade(0.0), (0.0, 0.0));
+        assert_eq!(coverage_fade(MIN_COVERAGE), (0.0, 0.0));
+        assert_eq!(coverage_fade(FADE_COVERAGE), (1.0, 0.0));
+        assert_eq!(coverage_fade(0.7), (1.0, 0.0));
+        let mut last = 0.0;
+        for i in 1..100 {
+            let c = MIN_COVERAGE + (FADE_COVERAGE - MIN_COVERAGE) * i as f64 / 100.0;
+            let (r, dr) = coverage_fade(c);
+            assert!(r > last && r < 1.0, "not increasing at {c}");
+            last = r;
+            let h = 1e-7;
+            let fd = (coverage_fade(c + h).0 - coverage_fade(c - h).0) / (2.0 * h);
+            assert!(
+                (dr - fd).abs() <= 1e-6 * dr.abs().max(1.0),
+                "{c}: {dr} vs {fd}"
+            );
+        }
+    }
+
+    /// The traction integrals of a face: on a flat square the corner functions integrate to a
+    /// quarter of the area each; on a curved, distorted Quad9 face the corner functions sum to
+    /// the area, and the gradient matches central differences of the integrals.
+    #[test]
+    fn traction_integrals_and_their_gradient() {
+        let square = [
+            [0.0, 0.0, 0.0],
+            [2.0, 0.0, 0.0],
+            [2.0, 2.0, 0.0],
+            [0.0, 2.0, 0.0],
+        ];
+        let flat = traction_integrals(
+            FaceType::Quad4,
+            TractionScheme::Corners,
+            &square,
+            false,
+            |_, _| {},
+        );
+        assert!((flat.area - 4.0).abs() < 1e-14);
+        for v in &flat.value {
+            assert!((v - 1.0).abs() < 1e-14, "{v}");
+        }
+        let parent = [
+            [-1.0, -1.0],
+            [1.0, -1.0],
+            [1.0, 1.0],
+            [-1.0, 1.0],
+            [0.0, -1.0],
+            [1.0, 0.0],
+            [0.0, 1.0],
+            [-1.0, 0.0],
+            [0.0, 0.0],
+        ];
+        let x: Vec<[f64; 3]> = parent
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let w = 0.05 * (i as f64 * 1.7).sin();
+                [p[0] + w, p[1] - 0.5 * w, 0.2 * p[0] * p[0] + 0.1 * p[1] + w]
+            })
+            .collect();
+        for scheme in [TractionScheme::Corners, TractionScheme::PiecewiseLinear] {
+            let f = traction_integrals(FaceType::Quad9, scheme, &x, true, |_, _| {});
+            if scheme == TractionScheme::Corners {
+                let sum: f64 = f.value.iter().sum();
+                assert!((sum - f.area).abs() < 1e-13 * f.area, "{sum} vs {}", f.area);
+            }
+            let h = 1e-6;
+            for b in 0..x.len() {
+                for c in 0..3 {
+                    let mut xp = x.clone();
+                    let mut xm = x.clone();
+                    xp[b][c] += h;
+                    xm[b][c] -= h;
+                    let fp = traction_integrals(FaceType::Quad9, scheme, &xp, false, |_, _| {});
+                    let fm = traction_integrals(FaceType::Quad9, scheme, &xm, false, |_, _| {});
+                    for k in 0..f.value.len() {
+                        let fd = (fp.value[k] - fm.value[k]) / (2.0 * h);
+                        let g = f.gradient[k * x.len() + b][c];
+                        assert!(
+                            (g - fd).abs() < 1e-7,
+                            "{scheme:?} k {k} node {b}.{c}: {g} vs {fd}"
+                        );
+                    }
+                }
+            }
+        }
+    }
 
     #[test]
     fn passes_are_dealt_before_strips() {
