@@ -306,9 +306,9 @@ pub struct InterfaceSpec {
     /// traction function over the whole secondary surface, reference configuration); contact,
     /// the mean of sqrt(area) of the secondary faces around A (reference configuration), so
     /// that a uniform mesh has one penalty (the penalty patch test); a contact node partly
-    /// covered by the primary surface has its penalties divided by its coverage (at most by
-    /// 20; below 5 % coverage it carries no traction: `contact::frictional`). Default 1000
-    /// for tied interfaces (one pass then needs 1-3 Uzawa augmentations) and 100 for contact.
+    /// covered by the primary surface has its penalties divided by its coverage (below 5 %
+    /// coverage its traction fades out: `contact::frictional`). Default 1000 for tied
+    /// interfaces (one pass then needs 1-3 Uzawa augmentations) and 100 for contact.
     pub penalty: Option<f64>,
     /// Uzawa augmentations stop when every violation is below this fraction of h_A. Tied: the
     /// gap |g_A| / a_A; default 1e-12 (the tied patch test holds to 1e-10). Contact: the
