@@ -80,9 +80,9 @@ fn figure_7_cases_agree_and_slip_at_mu() {
         assert!(smooth < MORTAR_SMOOTHNESS, "{variant}: smoothness {smooth}");
     }
     // The Uzawa target on the one-pass mortar cases: at most 5 augmentations in every
-    // step, and no step left at the cap (measured: case 2 at most 4, case 3 at most 3, case 4 at
-    // most 5, in steps whose fifth augmentation ends about 25 % under the tolerance; case 4 took up
-    // to 10 in 13 steps before the coverage scale of the penalties).
+    // step (measured: case 2 at most 4, case 3 at most 3, case 4 at most 5, in three steps whose
+    // fifth augmentation ends at 0.53-0.77 of the tolerance; case 4 took up to 10, the cap, in 13
+    // steps before the coverage scale of the penalties), and so no step left at the cap.
     for variant in [
         "case2_hex27_lower_secondary",
         "case3_hex27_upper_secondary",

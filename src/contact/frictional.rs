@@ -441,6 +441,7 @@ impl ContactInterface {
             scale: self.penalty_scale,
             x,
             x_old,
+            face_integrals: RefCell::new(BTreeMap::new()),
         }
     }
 }
@@ -1000,6 +1001,9 @@ struct EvalContext<'a> {
     /// Current and last converged positions of every node.
     x: &'a [[f64; 3]],
     x_old: &'a [[f64; 3]],
+    /// The traction integrals of the secondary faces at `x`, computed once per face for the
+    /// nodes they carry (with the gradient if it was asked for).
+    face_integrals: RefCell<BTreeMap<usize, Rc<TractionIntegrals>>>,
 }
 
 /// Sums of one node's weights.
@@ -1132,19 +1136,34 @@ impl ContactPass {
 
     /// The full integral of traction node `a`'s function over the secondary faces carrying
     /// it at positions `x` ([`traction_integrals`]), with its gradient if asked.
-    fn full_integral(&self, x: &[[f64; 3]], a: usize, gradient: bool) -> FullIntegral {
+    fn full_integral(&self, ctx: &EvalContext, a: usize, gradient: bool) -> FullIntegral {
         let mut full = FullIntegral {
             value: 0.0,
             gradient: Vec::new(),
         };
         for &(f, k) in &self.node_faces[a] {
             let face = &self.sec_faces[f];
-            let xf: Vec<[f64; 3]> = face.nodes.iter().map(|&n| x[n]).collect();
-            let integrals =
-                traction_integrals(face.kind, self.carrier_scheme, &xf, gradient, |_, _| {});
+            let n = face.nodes.len();
+            let cached = ctx.face_integrals.borrow().get(&f).cloned();
+            let integrals = match cached {
+                Some(i) if !gradient || !i.gradient.is_empty() => i,
+                _ => {
+                    let xf: Vec<[f64; 3]> = face.nodes.iter().map(|&m| ctx.x[m]).collect();
+                    let scheme = self.carrier_scheme;
+                    let i = Rc::new(traction_integrals(
+                        face.kind,
+                        scheme,
+                        &xf,
+                        gradient,
+                        |_, _| {},
+                    ));
+                    ctx.face_integrals.borrow_mut().insert(f, Rc::clone(&i));
+                    i
+                }
+            };
             full.value += integrals.value[k];
             if gradient {
-                let per_node = &integrals.gradient[k * xf.len()..(k + 1) * xf.len()];
+                let per_node = &integrals.gradient[k * n..(k + 1) * n];
                 full.gradient
                     .extend(face.nodes.iter().copied().zip(per_node.iter().copied()));
             }
@@ -1501,7 +1520,7 @@ impl ContactPass {
             normal: nu,
             ..Default::default()
         };
-        let full = self.full_integral(ctx.x, a, tangent);
+        let full = self.full_integral(ctx, a, tangent);
         if kin.area < MIN_COVERAGE * full.value {
             return (None, fields);
         }
