@@ -206,14 +206,15 @@ pub fn coverage_fade(coverage: f64) -> (f64, f64) {
 /// the base slide, whose secondary surface is covered whole).
 pub const COVERED_TOL: f64 = 1e-6;
 
-/// The factor `s_A = a_full_A / a_A` by which the penalties of a partly covered node are
-/// multiplied (`a_full_A` over the current faces carrying A), `None` for a covered node
-/// (`a_A >= (1 - COVERED_TOL) a_full_A`: factor 1). With it, the penalty *force* of a node per unit
+/// The factor `s_A = (1 - COVERED_TOL) a_full_A / a_A` (continuous at the margin) by which the
+/// penalties of a partly covered node are multiplied (`a_full_A` over the current faces carrying
+/// A), `None` for a covered node (`a_A >= (1 - COVERED_TOL) a_full_A`: factor 1). With it, the penalty *force* of a node per unit
 /// normalized gap, `a_A s_A eps`, is that of a fully covered node whatever its coverage
 /// (module docs, "Coverage scale"). Called for nodes with `a_A >= MIN_COVERAGE a_full_A`, so
 /// `s_A <= 1 / MIN_COVERAGE`.
 pub fn coverage_scale(area: f64, a_full: f64) -> Option<f64> {
-    (area > 0.0 && area < (1.0 - COVERED_TOL) * a_full).then(|| a_full / area)
+    let covered = (1.0 - COVERED_TOL) * a_full;
+    (area > 0.0 && area < covered).then(|| covered / area)
 }
 
 /// Number of figures of [`ContactInterfaces::force_sums`] per interface.
@@ -269,8 +270,11 @@ pub struct NodeFields {
     pub pressure: f64,
     /// Normalized slip increment of the step `dsh_A`, tangential part.
     pub slip: [f64; 3],
-    /// Tangential traction `t_T`.
+    /// Tangential traction `t_T` (as applied: times the fade of a fading node).
     pub traction_t: [f64; 3],
+    /// The return map's `t_T` before the fade: the history of the next step (not in
+    /// `pass_fields`).
+    pub law_traction_t: [f64; 3],
     /// Unit nodal normal.
     pub normal: [f64; 3],
     /// 0 open (no overlap, open, or inside the touching band), 1 stick, 2 slip.
@@ -676,6 +680,7 @@ impl ContactInterfaces {
                 normal: [v[9], v[10], v[11]],
                 status: v[12] as u8,
                 full_area: v[13],
+                law_traction_t: [0.0; 3],
                 weighted_gap: [0.0; 3],
                 segment: None,
             })
@@ -936,12 +941,17 @@ impl ContactInterfaces {
                     let st = &mut pass.state[a];
                     st.gap_old = (f.area > 0.0).then_some(f.weighted_gap);
                     st.segment_old = f.segment;
+                    if f.area == 0.0 {
+                        // No traction: the multiplier is released (the Uzawa updates release
+                        // it only when an interface augments).
+                        st.history.lambda_n = 0.0;
+                    }
                     if mu > 0.0 && f.normal != [0.0; 3] {
                         st.history = NodeHistory {
                             lambda_n: st.history.lambda_n,
                             lambda_t: [0.0; 3],
                             normal_old: f.normal,
-                            traction_t_old: f.traction_t,
+                            traction_t_old: f.law_traction_t,
                         };
                     } else if f.area == 0.0 {
                         // No contact (node-on-segment: no face under the node): no tangential
@@ -1327,6 +1337,7 @@ impl ContactPass {
             pressure: c.pressure,
             slip: c.slip,
             traction_t: c.friction.traction,
+            law_traction_t: c.friction.traction,
             normal: c.nu,
             status: match c.friction.status {
                 Status::Open => 0,
@@ -1520,7 +1531,7 @@ impl ContactPass {
             normal: nu,
             ..Default::default()
         };
-        let full = self.full_integral(ctx, a, tangent);
+        let mut full = self.full_integral(ctx, a, false);
         if kin.area < MIN_COVERAGE * full.value {
             return (None, fields);
         }
@@ -1528,6 +1539,9 @@ impl ContactPass {
         let (fade, dfade) = coverage_fade(area / full.value);
         let gh = dot(nu, kin.gap) / area;
         let coverage = coverage_scale(area, full.value);
+        if coverage.is_some() && tangent {
+            full = self.full_integral(ctx, a, true);
+        }
         let prm = self.law_params(st, ctx.iface_mu, ctx.scale, coverage.unwrap_or(1.0));
         let (p, dp_dgh) =
             normal_pressure_touching(st.history.lambda_n, prm.eps_n, gh, TOUCH_TOLERANCE * st.h);
@@ -1562,6 +1576,7 @@ impl ContactPass {
             pressure: fade * p,
             slip: tangential(dsh, nu),
             traction_t: fr.traction.map(|v| fade * v),
+            law_traction_t: fr.traction,
             normal: nu,
             status: match fr.status {
                 Status::Open => 0,
