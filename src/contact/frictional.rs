@@ -207,11 +207,11 @@ pub fn coverage_fade(coverage: f64) -> (f64, f64) {
 pub const COVERED_TOL: f64 = 1e-6;
 
 /// The factor `s_A = (1 - COVERED_TOL) a_full_A / a_A` (continuous at the margin) by which the
-/// penalties of a partly covered node are multiplied (`a_full_A` over the current faces carrying
-/// A), `None` for a covered node (`a_A >= (1 - COVERED_TOL) a_full_A`: factor 1). With it, the penalty *force* of a node per unit
-/// normalized gap, `a_A s_A eps`, is that of a fully covered node whatever its coverage
-/// (module docs, "Coverage scale"). Called for nodes with `a_A >= MIN_COVERAGE a_full_A`, so
-/// `s_A <= 1 / MIN_COVERAGE`.
+/// penalties of a partly covered node are multiplied (`a_full_A` over the current faces
+/// carrying A), `None` for a covered node (`a_A >= (1 - COVERED_TOL) a_full_A`: factor 1).
+/// With it, the penalty *force* of a node per unit normalized gap, `a_A s_A eps`, is that of a
+/// fully covered node whatever its coverage (module docs, "Coverage scale"). Called for nodes
+/// with `a_A >= MIN_COVERAGE a_full_A`, so `s_A <= 1 / MIN_COVERAGE`.
 pub fn coverage_scale(area: f64, a_full: f64) -> Option<f64> {
     let covered = (1.0 - COVERED_TOL) * a_full;
     (area > 0.0 && area < covered).then(|| covered / area)
