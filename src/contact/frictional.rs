@@ -298,8 +298,6 @@ pub struct ContactPass {
     carriers: Vec<Vec<usize>>,
     /// Per traction node: the secondary faces carrying it, with its index `k` in each.
     node_faces: Vec<Vec<(usize, usize)>>,
-    /// The traction scheme of the faces' carriers.
-    carrier_scheme: TractionScheme,
     /// Per traction node. The multipliers and history (`history`, `gap_old`, `segment_old`)
     /// are kept only by the rank holding the node; elsewhere they stay as they started. (The
     /// node-on-segment pattern reads `segment_old` on every rank: a row owned by another rank
@@ -1121,7 +1119,6 @@ impl ContactPass {
             nodes,
             carriers,
             node_faces,
-            carrier_scheme,
             state,
             local_faces,
             held,
@@ -1159,7 +1156,7 @@ impl ContactPass {
                 Some(i) if !gradient || !i.gradient.is_empty() => i,
                 _ => {
                     let xf: Vec<[f64; 3]> = face.nodes.iter().map(|&m| ctx.x[m]).collect();
-                    let scheme = self.carrier_scheme;
+                    let scheme = self.method.carrier_scheme(ctx.scheme);
                     let i = Rc::new(traction_integrals(
                         face.kind,
                         scheme,
@@ -2154,17 +2151,7 @@ mod tests {
         for v in &flat.value {
             assert!((v - 1.0).abs() < 1e-14, "{v}");
         }
-        let parent = [
-            [-1.0, -1.0],
-            [1.0, -1.0],
-            [1.0, 1.0],
-            [-1.0, 1.0],
-            [0.0, -1.0],
-            [1.0, 0.0],
-            [0.0, 1.0],
-            [-1.0, 0.0],
-            [0.0, 0.0],
-        ];
+        let parent = FaceType::Quad9.node_coords();
         let x: Vec<[f64; 3]> = parent
             .iter()
             .enumerate()
