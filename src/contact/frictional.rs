@@ -2101,10 +2101,129 @@ fn tangential(v: [f64; 3], nu: [f64; 3]) -> [f64; 3] {
 #[cfg(test)]
 mod tests {
     use super::{
-        coverage_fade, deal_in_strips, pass_ranks, traction_integrals, FADE_COVERAGE, MIN_COVERAGE,
+        coverage_fade, deal_in_strips, pass_ranks, traction_integrals, ContactInterfaces,
+        FADE_COVERAGE, MIN_COVERAGE,
     };
+    use crate::case::Scene;
     use crate::contact::mortar::TractionScheme;
+    use crate::dofs::DofMap;
     use crate::fe::FaceType;
+
+    /// The Uzawa bookkeeping of partly covered nodes. The upper block covers the top of the
+    /// lower one (4 x 4 Hex8 faces, nodes every 0.25) from x = 0.45 on, 0.01 deep: the node
+    /// row at x = 0 has no overlap, the row at x = 0.25 is covered about 2 % (fading), the row
+    /// at x = 0.5 about 98 % (its penalties scaled), the rest wholly. Every node starts with
+    /// multipliers. One Uzawa update:
+    /// - releases the multipliers of the nodes without traction, without a violation (they
+    ///   exert no force whatever their multipliers);
+    /// - leaves the fading nodes out (no constraint to meet; multipliers kept);
+    /// - updates every other node, and counts its penetration as a violation.
+    ///
+    /// Closing the step (`commit`) then releases the normal multiplier of the nodes without
+    /// traction, and keeps that of the fading nodes.
+    #[test]
+    fn uzawa_skips_fading_nodes_and_releases_nodes_without_traction() {
+        let case = r#"
+name = "uzawa_coverage"
+[[mesh]]
+body = "low"
+generator = "box"
+element = "hex8"
+divisions = [4, 4, 1]
+lo = [0.0, 0.0, 0.0]
+hi = [1.0, 1.0, 0.5]
+[[mesh]]
+body = "up"
+generator = "box"
+element = "hex8"
+divisions = [2, 2, 1]
+lo = [0.45, 0.0, 0.49]
+hi = [1.45, 1.0, 1.0]
+[[material]]
+body = "low"
+model = "neo_hookean"
+young = 1000.0
+poisson = 0.3
+[[material]]
+body = "up"
+model = "neo_hookean"
+young = 1000.0
+poisson = 0.3
+[[symmetry]]
+set = "low.zmin"
+normal = "z"
+[[dirichlet]]
+set = "up.zmax"
+components = ["x", "y", "z"]
+value = [0.0, 0.0, 0.0]
+[[interface]]
+name = "blocks"
+kind = "contact"
+secondary = "low.zmax"
+primary = "up.zmin"
+scheme = 2
+friction = 0.3
+"#;
+        let dir = std::env::temp_dir().join(format!("mortar-uzawa-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("case.toml");
+        std::fs::write(&path, case).unwrap();
+        let scene = Scene::load(&path).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        let elements = vec![0; scene.mesh.num_elements()];
+        let dofs = DofMap::new(&scene.mesh, elements, 0, 1, &scene.constrained_mask());
+        let mut contact = ContactInterfaces::new(&scene, &dofs).unwrap();
+        const LAMBDA_N: f64 = 5.0;
+        for st in &mut contact.interfaces[0].passes[0].state {
+            st.history.lambda_n = LAMBDA_N;
+            st.history.lambda_t = [0.5, 0.0, 0.0];
+        }
+        let u = vec![0.0; 3 * scene.mesh.num_nodes()];
+
+        let fields = contact.local_fields(&scene, 0, 0, &u);
+        let updates = contact.uzawa_updates(&scene, 0, &u);
+        let (mut without, mut fading, mut covered) = (0, 0, 0);
+        for (a, f) in &fields {
+            let update = updates.iter().find(|(p, b, ..)| *p == 0 && b == a);
+            if f.area == 0.0 {
+                without += 1;
+                let (_, _, violation, new) = update.expect("a node without traction is released");
+                assert_eq!(*violation, 0.0, "node {a}: a release is no violation");
+                assert_eq!((new.lambda_n, new.lambda_t), (0.0, [0.0; 3]), "node {a}");
+            } else if f.area < FADE_COVERAGE * f.full_area {
+                fading += 1;
+                assert!(
+                    update.is_none(),
+                    "fading node {a} (coverage {}) updated",
+                    f.area / f.full_area
+                );
+            } else {
+                covered += 1;
+                let (_, _, violation, new) = update.expect("a covered node is updated");
+                assert!(f.gap > 0.0, "node {a}: gap {}", f.gap);
+                assert!(*violation > 1.0, "node {a}: violation {violation}");
+                assert!(
+                    new.lambda_n > LAMBDA_N,
+                    "node {a}: lambda_n {}",
+                    new.lambda_n
+                );
+            }
+        }
+        // 5 nodes per row: one row without overlap, one fading, three covered.
+        assert_eq!((without, fading, covered), (5, 5, 15));
+
+        contact.commit(&scene, &u);
+        let pass = &contact.interfaces[0].passes[0];
+        for (a, f) in &fields {
+            let lambda_n = pass.state[*a].history.lambda_n;
+            if f.area == 0.0 {
+                assert_eq!(lambda_n, 0.0, "node {a} without traction keeps {lambda_n}");
+                assert_eq!(pass.state[*a].history.traction_t_old, [0.0; 3]);
+            } else {
+                assert_eq!(lambda_n, LAMBDA_N, "node {a}");
+            }
+        }
+    }
 
     /// The fade is 0 up to MIN_COVERAGE, 1 from FADE_COVERAGE on, increasing between, with a
     /// continuous derivative that matches central differences (and is 0 at both ends).
