@@ -101,6 +101,20 @@ pub fn comm() -> petsc_ffi::MPI_Comm {
     })
 }
 
+/// The number of ranks of [`comm`].
+pub fn comm_size() -> crate::Result<usize> {
+    let mut size: std::os::raw::c_int = 0;
+    // SAFETY: `comm()` is a valid communicator once MPI is initialized (PETSc initializes it
+    // first; `ensure_initialized`), and `size` is a valid out-pointer.
+    let code = unsafe { petsc_ffi::MPI_Comm_size(comm(), &mut size) };
+    if code != 0 {
+        return Err(crate::Error::Solve(format!(
+            "MPI_Comm_size failed ({code})"
+        )));
+    }
+    Ok(size.max(0) as usize)
+}
+
 /// Sets (or, with `None`, unsets) the communicator returned by [`comm`].
 fn set_run_comm(raw: Option<petsc_ffi::MPI_Comm>) {
     RUN_COMM.with(|c| c.set(raw));
