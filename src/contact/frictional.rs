@@ -2109,22 +2109,15 @@ mod tests {
     use crate::dofs::DofMap;
     use crate::fe::FaceType;
 
-    /// The Uzawa bookkeeping of partly covered nodes. The upper block covers the top of the
-    /// lower one (4 x 4 Hex8 faces, nodes every 0.25) from x = 0.45 on, 0.01 deep: the node
-    /// row at x = 0 has no overlap, the row at x = 0.25 is covered about 2 % (fading), the row
-    /// at x = 0.5 about 98 % (its penalties scaled), the rest wholly. Every node starts with
-    /// multipliers. One Uzawa update:
-    /// - releases the multipliers of the nodes without traction, without a violation (they
-    ///   exert no force whatever their multipliers);
-    /// - leaves the fading nodes out (no constraint to meet; multipliers kept);
-    /// - updates every other node, and counts its penetration as a violation.
-    ///
-    /// Closing the step (`commit`) then releases the normal multiplier of the nodes without
-    /// traction, and keeps that of the fading nodes.
-    #[test]
-    fn uzawa_skips_fading_nodes_and_releases_nodes_without_traction() {
+    /// Two Hex8 blocks: the top of the lower one (4 x 4 faces, nodes every 0.25, the secondary
+    /// side) covered by the upper one from x = 0.45 and y = 0.245 on, 0.01 deep. With bilinear
+    /// traction functions a node's coverage is the product of its coverages along x and y:
+    /// along x, the column at 0 has no overlap, the column at 0.25 is 2 % covered, the one at
+    /// 0.5 68 %, the others wholly; along y, the row at 0 is 0.04 % covered (below
+    /// [`MIN_COVERAGE`]), the row at 0.25 52 %, the others wholly.
+    fn partly_covered_blocks() -> Scene {
         let case = r#"
-name = "uzawa_coverage"
+name = "partly_covered"
 [[mesh]]
 body = "low"
 generator = "box"
@@ -2137,8 +2130,8 @@ body = "up"
 generator = "box"
 element = "hex8"
 divisions = [2, 2, 1]
-lo = [0.45, 0.0, 0.49]
-hi = [1.45, 1.0, 1.0]
+lo = [0.45, 0.245, 0.49]
+hi = [1.45, 1.245, 1.0]
 [[material]]
 body = "low"
 model = "neo_hookean"
@@ -2164,12 +2157,29 @@ primary = "up.zmin"
 scheme = 2
 friction = 0.3
 "#;
-        let dir = std::env::temp_dir().join(format!("mortar-uzawa-{}", std::process::id()));
+        let dir = std::env::temp_dir().join(format!("mortar-covered-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("case.toml");
         std::fs::write(&path, case).unwrap();
         let scene = Scene::load(&path).unwrap();
         std::fs::remove_dir_all(&dir).unwrap();
+        scene
+    }
+
+    /// The Uzawa bookkeeping of partly covered nodes ([`partly_covered_blocks`]), every node
+    /// starting with multipliers. One Uzawa update
+    /// - releases the multipliers of the nodes without traction (no overlap, or below
+    ///   [`MIN_COVERAGE`]), without a violation: they exert no force whatever their multipliers;
+    /// - leaves the fading nodes out (below [`FADE_COVERAGE`]: no constraint to meet, the
+    ///   multipliers kept);
+    /// - updates every other node, partly covered or not, and counts its penetration as a
+    ///   violation.
+    ///
+    /// Closing the step (`commit`, without applying the update) then releases the normal
+    /// multiplier of the nodes without traction and keeps those of the others.
+    #[test]
+    fn uzawa_skips_fading_nodes_and_releases_nodes_without_traction() {
+        let scene = partly_covered_blocks();
         let elements = vec![0; scene.mesh.num_elements()];
         let dofs = DofMap::new(&scene.mesh, elements, 0, 1, &scene.constrained_mask());
         let mut contact = ContactInterfaces::new(&scene, &dofs).unwrap();
@@ -2182,45 +2192,53 @@ friction = 0.3
 
         let fields = contact.local_fields(&scene, 0, 0, &u);
         let updates = contact.uzawa_updates(&scene, 0, &u);
-        let (mut without, mut fading, mut covered) = (0, 0, 0);
+        // Nodes without traction, fading, partly covered, wholly covered.
+        let mut counts = [0; 4];
         for (a, f) in &fields {
             let update = updates.iter().find(|(p, b, ..)| *p == 0 && b == a);
+            let coverage = f.area / f.full_area;
             if f.area == 0.0 {
-                without += 1;
+                counts[0] += 1;
                 let (_, _, violation, new) = update.expect("a node without traction is released");
                 assert_eq!(*violation, 0.0, "node {a}: a release is no violation");
                 assert_eq!((new.lambda_n, new.lambda_t), (0.0, [0.0; 3]), "node {a}");
-            } else if f.area < FADE_COVERAGE * f.full_area {
-                fading += 1;
+                continue;
+            }
+            if coverage < FADE_COVERAGE {
+                counts[1] += 1;
                 assert!(
                     update.is_none(),
-                    "fading node {a} (coverage {}) updated",
-                    f.area / f.full_area
+                    "fading node {a} (coverage {coverage}) updated"
                 );
-            } else {
-                covered += 1;
-                let (_, _, violation, new) = update.expect("a covered node is updated");
-                assert!(f.gap > 0.0, "node {a}: gap {}", f.gap);
-                assert!(*violation > 1.0, "node {a}: violation {violation}");
-                assert!(
-                    new.lambda_n > LAMBDA_N,
-                    "node {a}: lambda_n {}",
-                    new.lambda_n
-                );
+                continue;
             }
+            counts[if coverage < 1.0 - 1e-9 { 2 } else { 3 }] += 1;
+            let (_, _, violation, new) = update.expect("a covered node is updated");
+            assert!(f.gap > 0.0, "node {a}: gap {}", f.gap);
+            assert!(*violation > 1.0, "node {a}: violation {violation}");
+            assert!(
+                new.lambda_n > LAMBDA_N,
+                "node {a}: lambda_n {}",
+                new.lambda_n
+            );
         }
-        // 5 nodes per row: one row without overlap, one fading, three covered.
-        assert_eq!((without, fading, covered), (5, 5, 15));
+        // Without traction: the column at x = 0 and the rest of the row at y = 0; fading: the
+        // rest of the column at x = 0.25; partly covered: the rest of the column at x = 0.5 and
+        // of the row at y = 0.25.
+        assert_eq!(counts, [9, 4, 6, 6]);
 
         contact.commit(&scene, &u);
         let pass = &contact.interfaces[0].passes[0];
         for (a, f) in &fields {
-            let lambda_n = pass.state[*a].history.lambda_n;
+            let history = &pass.state[*a].history;
             if f.area == 0.0 {
-                assert_eq!(lambda_n, 0.0, "node {a} without traction keeps {lambda_n}");
-                assert_eq!(pass.state[*a].history.traction_t_old, [0.0; 3]);
+                assert_eq!(history.lambda_n, 0.0, "node {a} without traction");
+                assert_eq!(
+                    history.traction_t_old, [0.0; 3],
+                    "node {a} without traction"
+                );
             } else {
-                assert_eq!(lambda_n, LAMBDA_N, "node {a}");
+                assert_eq!(history.lambda_n, LAMBDA_N, "node {a}");
             }
         }
     }

@@ -19,8 +19,9 @@
 //! (`-matstash_legacy`, a default the options override): the newer one sorts and merges every
 //! stashed entry before sending it, which on two ranks cost more than the messages themselves.
 //! Measured on the scaling scene (`cases/scaling`, 2 ranks, about 250 k and 130 k stashed
-//! entries per assembly, two runs each, alternated): `MatAssemblyBegin` and `MatAssemblyEnd`
-//! 1.8 s -> 1.0 s, the bulk assembly stage 3.9-4.1 s -> 2.7 s, the run 18.6-19.0 s -> 16.9 s.
+//! entries per assembly; alternated runs of one build): `MatAssemblyBegin` and
+//! `MatAssemblyEnd` 1.8-1.9 s -> 0.6 s, the run 18.5-18.6 s -> 16.9-17.2 s (see
+//! `cases/scaling/README.md`).
 
 use petsc_ffi as p;
 
@@ -62,7 +63,7 @@ pub struct Matrix {
 }
 
 impl Matrix {
-    /// A square AIJ matrix over the world communicator with `sparsity.rows.len()` owned rows and
+    /// A square AIJ matrix over [`super::comm`] with `sparsity.rows.len()` owned rows and
     /// columns, preallocated exactly and holding explicit zeros on the whole pattern (module
     /// docs); new nonzeros are an error. Collective.
     pub fn new_aij(sparsity: &Sparsity) -> Result<Matrix> {

@@ -103,16 +103,19 @@ pub fn comm() -> petsc_ffi::MPI_Comm {
 
 /// The number of ranks of [`comm`].
 pub fn comm_size() -> crate::Result<usize> {
+    ensure_initialized()?;
     let mut size: std::os::raw::c_int = 0;
-    // SAFETY: `comm()` is a valid communicator once MPI is initialized (PETSc initializes it
-    // first; `ensure_initialized`), and `size` is a valid out-pointer.
+    // SAFETY: MPI is running (rsmpi started it before PETSc, and `ensure_initialized` checked
+    // that PETSc is up and not finalized), `comm()` is a valid communicator, and `size` is a
+    // valid out-pointer.
     let code = unsafe { petsc_ffi::MPI_Comm_size(comm(), &mut size) };
     if code != 0 {
-        return Err(crate::Error::Solve(format!(
+        // One rank's failure, not the job's (`Error::is_collective`): it must abort the job.
+        return Err(crate::Error::Other(format!(
             "MPI_Comm_size failed ({code})"
         )));
     }
-    Ok(size.max(0) as usize)
+    Ok(usize::try_from(size).unwrap_or(0))
 }
 
 /// Sets (or, with `None`, unsets) the communicator returned by [`comm`].

@@ -38,9 +38,10 @@ pub fn set_default(name: &str, value: &str) -> Result<()> {
 /// into the database, over the options file and the command line, remembering what was there;
 /// dropping the guard puts the old values back (or clears the names that were not set), each
 /// with its mark of having been read, so that PETSc's count of unused options stays true. The
-/// linear solver's defaults, which a run writes into the database when the user chose none
-/// (`ksp::set_linear_solver_defaults`), are put back too, so that they follow each run's own
-/// options and never leak from one run into the next.
+/// defaults a run writes into the database when the user chose none (the linear solver's,
+/// `ksp::set_linear_solver_defaults`, and the stash of a matrix on more than one rank,
+/// `matrix::Matrix::new_aij`; `ksp::DEFAULTED_OPTIONS`) are put back too, so that they follow
+/// each run's own options and never leak from one run into the next.
 #[derive(Debug)]
 pub struct Override {
     /// Each name with what was there before.
