@@ -65,17 +65,6 @@ impl Drop for Ksp {
     }
 }
 
-/// The options a run may write into the database as defaults ([`set_linear_solver_defaults`],
-/// and `-matstash_legacy` on more than one rank: `super::matrix::Matrix::new_aij`), restored
-/// with a study variant's own options (`options::Override`).
-pub(crate) const DEFAULTED_OPTIONS: [&str; 5] = [
-    "-pc_type",
-    "-pc_factor_mat_solver_type",
-    "-mat_mumps_icntl_24",
-    "-ksp_type",
-    "-matstash_legacy",
-];
-
 /// The default linear solver, as option defaults so that any user choice replaces it whole:
 /// with neither `-ksp_type` nor `-pc_type` given, a direct solve (`preonly`, `lu`, MUMPS, with
 /// null-pivot detection); with
