@@ -132,8 +132,8 @@ fn clap_one_line(e: &clap::Error) -> String {
         .join(" ")
 }
 
-/// Moves `--out DIR` and `--quiet` found among the PETSc options (after the case or study file)
-/// in front of that file, so clap sees them whatever their position.
+/// Moves `--out DIR`, `--quiet` and `--no-figure` found among the PETSc options (after the case
+/// or study file) in front of that file, so clap sees them whatever their position.
 fn pull_our_options(args: &[String]) -> Result<Vec<String>, String> {
     let Some(run_at) = args.iter().position(|a| a == "run" || a == "study") else {
         return Ok(args.to_vec());
@@ -150,7 +150,9 @@ fn pull_our_options(args: &[String]) -> Result<Vec<String>, String> {
                     _ => return Err("--out needs a folder (--out DIR)".into()),
                 }
             }
-            s if s.starts_with("--out=") || s == "--quiet" || s == "-q" => head.push(a.clone()),
+            s if s.starts_with("--out=") || matches!(s, "--quiet" | "-q" | "--no-figure") => {
+                head.push(a.clone())
+            }
             _ => rest.push(a.clone()),
         }
     }
@@ -414,4 +416,27 @@ fn warn_unused_options(petsc: &Petsc) {
 
 fn default_out(name: &str) -> PathBuf {
     Path::new("out").join(name)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::pull_our_options;
+
+    fn args(line: &str) -> Vec<String> {
+        line.split_whitespace().map(String::from).collect()
+    }
+
+    /// Our flags after a PETSc option reach clap, not PETSc; PETSc options keep their order.
+    #[test]
+    fn our_flags_are_pulled_out_of_the_petsc_options() {
+        let pulled = pull_our_options(&args(
+            "mortar run c.toml -snes_monitor --no-figure -ksp_type preonly --out d -q",
+        ))
+        .unwrap();
+        assert_eq!(
+            pulled,
+            args("mortar run --no-figure --out d -q c.toml -snes_monitor -ksp_type preonly")
+        );
+        assert!(pull_our_options(&args("mortar study s.toml --out -q")).is_err());
+    }
 }

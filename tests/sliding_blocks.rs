@@ -106,6 +106,9 @@ fn figure_7_cases_agree_and_slip_at_mu() {
     }
 }
 
+/// Most Newton iterations once the residual is below 1 % of its peak (a quadratic end).
+const END_GAME_ITERATIONS: usize = 3;
+
 /// Bound on the smoothness figure of the mortar curves (`smoothness_<variant>`: the largest
 /// change of the vertical force between consecutive steps after the stick phase over the mean
 /// change).
@@ -115,13 +118,16 @@ const MORTAR_SMOOTHNESS: f64 = 3.0;
 /// every step (the bound; `max_newton_its` counts every solve of a step, a failed
 /// full-step attempt included), quadratic ends, and the same result on 2 ranks.
 ///
-/// The order of a solve is log(r3 / r2) / log(r2 / r1) over its last three residuals, taken
-/// among the residuals from its largest one on (a slide step's first full step raises the
-/// residual while the stick and slip states settle), over every solve with three residuals
-/// after that peak. The last residual is included even when it sits at round-off (about 1e-11
-/// here), which can only lower the estimate. The median must be at least 1.8 (measured 2.97 over
-/// 38 solves; a finer floor is not available: the end game takes the residual from about 1e-3
-/// to round-off in two iterations).
+/// Quadratic ends: in every solve, once the residual is below 1 % of its largest value (a slide
+/// step's first full step may raise the residual while the stick and slip states settle), at
+/// most `END_GAME_ITERATIONS` = 3 iterations follow. Quadratic convergence takes a residual from
+/// 1e-2 of its scale to round-off (1e-13 of it here) in 2-3 (1e-2, 1e-4, 1e-8, 1e-16 with a
+/// constant near 1); a linear rate of 1e-3 needs 4. Measured: at most 2 in every one of 50
+/// solves (on 1 and 2 ranks); with the Jacobian lagged by one iteration
+/// (`-snes_lag_jacobian 2`) up to 7. (The median of the three-point order estimate
+/// `log(r3 / r2) / log(r2 / r1)` over the last residuals, used before, could not tell those two
+/// apart: 1.84-1.86 against 1.67, since the last residual sits at round-off, and it moved by 0.3
+/// between machines.)
 #[test]
 #[cfg_attr(
     debug_assertions,
@@ -139,23 +145,21 @@ fn newton_converges_quadratically_within_8_iterations() {
     let most = common::metric(&out, "max_newton_its");
     assert!(most <= 8.0, "max_newton_its {most}");
     assert_eq!(common::metric(&out, "line_search_fallbacks"), 0.0);
-    let mut orders: Vec<f64> = common::snes_monitor_histories(&stdout)
-        .into_iter()
-        .filter_map(|h| {
-            let peak = (0..h.len()).max_by(|&i, &j| h[i].total_cmp(&h[j]))?;
-            let r = &h[peak..];
-            let n = r.len();
-            (n >= 4).then(|| (r[n - 1] / r[n - 2]).ln() / (r[n - 2] / r[n - 3]).ln())
-        })
-        .collect();
-    assert!(
-        orders.len() >= 20,
-        "too few solves measured: {}",
-        orders.len()
-    );
-    orders.sort_by(f64::total_cmp);
-    let median = orders[orders.len() / 2];
-    assert!(median >= 1.8, "median order {median}; all {orders:?}");
+    let histories = common::snes_monitor_histories(&stdout);
+    assert!(histories.len() >= 20, "too few solves: {}", histories.len());
+    for h in &histories {
+        let Some(peak) = (0..h.len()).max_by(|&i, &j| h[i].total_cmp(&h[j])) else {
+            continue;
+        };
+        let below = (peak..h.len()).find(|&i| h[i] < 1e-2 * h[peak]);
+        if let Some(k) = below {
+            let end_game = h.len() - 1 - k;
+            assert!(
+                end_game <= END_GAME_ITERATIONS,
+                "{end_game} iterations below 1 % of the peak: {h:?}"
+            );
+        }
+    }
 
     let (out2, _) = common::run_case(&case, 2, &["-q"]);
     let d = common::max_rel_difference(&common::displacements(&out), &common::displacements(&out2));

@@ -35,9 +35,18 @@
 //! plane) and `R = R(nu_old, n)` the transport of [`transport`]:
 //!
 //! - trial: `t_tr = P (R q + eps_t dsh)` (any normal component of `dsh` is discarded);
-//! - stick if `|t_tr| <= mu p`: `t_T = t_tr`;
+//! - stick if `|t_tr| <= (1 - CONE_TIE) mu p`: `t_T = t_tr`;
 //! - slip otherwise: `t_T = mu p m`, `m = t_tr / |t_tr|`; then `|t_T| = mu p`, `t_T` is parallel
 //!   to `t_tr` and orthogonal to `n`.
+//!
+//! The band [`CONE_TIE`] (1e-10 relative) settles a tie: a node that slipped in the last step
+//! starts the next one carrying a traction on the cone, so its first trial (the predictor's,
+//! `dsh = 0`) lies on the cone to round-off, and round-off alone (which differs between rank
+//! counts and machines) used to pick its first tangent, stick or slip. Measured on a partly
+//! covered frictional slide (`tests/contact.rs`, `contact_one_and_two_ranks_agree`): one rank
+//! count cut a step and the other did not, and the runs ended 3e-5 apart; with the band both
+//! take slip, the same path (1e-14 apart) and 78 Newton iterations instead of 95-111. The
+//! traction is continuous across the band to `CONE_TIE mu p`.
 //!
 //! Derivatives returned in [`FrictionResult`] (matrices row-major: `d[i][j] = d t_T_i / d x_j`):
 //!
@@ -49,8 +58,9 @@
 //! - stick: `dt_T/dx = dt_tr/dx`, `dt_T/dp = 0`;
 //! - slip: `dt_T/dx = (mu p / |t_tr|) (I - m (x) m) dt_tr/dx`, `dt_T/dp = mu m`.
 //!
-//! The slip factor `mu p / |t_tr|` is below 1 in slip, so the tangent stays bounded however small
-//! `t_tr` is. The only division by `|t_tr|` happens in slip, where `|t_tr| > mu p >= 0`; the norm
+//! The slip factor `mu p / |t_tr|` is below `1 / (1 - CONE_TIE)` in slip, so the tangent stays
+//! bounded however small `t_tr` is. The only division by `|t_tr|` happens in slip, where
+//! `|t_tr| > (1 - CONE_TIE) mu p >= 0`; the norm
 //! is computed with scaling (no underflow to 0 for components around 1e-200, no overflow around
 //! 1e200), so `t_tr -> 0` gives no NaN: `t_tr = 0` exactly is stick (`0 <= mu p`), and a tiny
 //! nonzero `t_tr` above a tinier cone is normalized safely.
@@ -142,9 +152,9 @@ pub enum Status {
     /// `p = 0`, or a node inside the touching band ([`touching_friction`]): no tangential
     /// traction.
     Open,
-    /// `|t_tr| <= mu p`: `t_T = t_tr`.
+    /// `|t_tr| <= (1 - CONE_TIE) mu p`: `t_T = t_tr`.
     Stick,
-    /// `|t_tr| > mu p` (or `mu = 0` with `p > 0`): `t_T = mu p t_tr / |t_tr|`.
+    /// `|t_tr| > (1 - CONE_TIE) mu p` (or `mu = 0` with `p > 0`): `t_T = mu p t_tr / |t_tr|`.
     Slip,
 }
 
@@ -365,11 +375,16 @@ pub fn transport(v: [f64; 3], nu_old: [f64; 3], nu: [f64; 3]) -> [f64; 3] {
     )
 }
 
+/// Relative band below the Coulomb cone that counts as on it, in slip (module docs, "Coulomb
+/// law"): `|t_tr| > (1 - CONE_TIE) mu p` is slip.
+pub const CONE_TIE: f64 = 1e-10;
+
 /// Frictional traction at a node: `t_T` from the trial
 /// `t_tr = P (R(nu_old, nu) (traction_t_old + lambda_t) + eps_t dsh)`, stick if
-/// `|t_tr| <= mu p`, else slip `t_T = mu p t_tr / |t_tr|`; with the derivatives with respect to
-/// `dsh`, `p` and `nu` (module docs). `p <= 0` returns zeros and [`Status::Open`], `mu = 0`
-/// returns zeros and [`Status::Slip`], without computing anything else.
+/// `|t_tr| <= (1 - CONE_TIE) mu p`, else slip `t_T = mu p t_tr / |t_tr|`; with the derivatives
+/// with respect to `dsh`, `p` and `nu` (module docs). `p <= 0` returns zeros and
+/// [`Status::Open`], `mu = 0` returns zeros and [`Status::Slip`], without computing anything
+/// else.
 ///
 /// # Panics
 /// If `nu` is zero.
@@ -413,10 +428,11 @@ pub fn friction_traction(
 
     let cone = prm.mu * p;
     let tn = norm3(&trial);
-    let (traction, status, d_dsh, d_p, d_nu) = if tn <= cone {
+    let (traction, status, d_dsh, d_p, d_nu) = if tn <= cone * (1.0 - CONE_TIE) {
         (trial, Status::Stick, dtr_ddsh, Vector3::zeros(), dtr_dnu)
     } else {
-        // Slip: tn > cone >= 0, so the division is safe and cone / tn < 1.
+        // Slip: tn > (1 - CONE_TIE) cone >= 0, so the division is safe and cone / tn is at
+        // most 1 / (1 - CONE_TIE).
         let m = trial / tn;
         let dm = (cone / tn) * (Matrix3::identity() - m * m.transpose());
         (
@@ -751,6 +767,30 @@ mod tests {
             check_all_derivatives(&h, &prm, nu, p, dsh);
             if st == Status::Slip {
                 slip_properties(&r, &prm, nu, p);
+            }
+        }
+    }
+
+    /// A trial on the cone to round-off (a node that slipped, at the start of its next step) is
+    /// slip on either side of the cone, so round-off does not pick its first tangent; a trial
+    /// 1e-9 inside is stick, as without the band.
+    #[test]
+    fn trial_on_the_cone_to_round_off_is_slip() {
+        let (h, prm, nu) = state();
+        let dsh = tangent([0.01, 0.004, 0.0], nu);
+        let tn = nrm(friction_traction(&h, &prm, nu, 1.0, dsh).trial);
+        for (f, st) in [
+            (1.0 + 1e-13, Status::Slip),
+            (1.0, Status::Slip),
+            (1.0 - 1e-13, Status::Slip),
+            (1.0 + 1e-9, Status::Stick),
+        ] {
+            let p = f * tn / prm.mu;
+            let r = friction_traction(&h, &prm, nu, p, dsh);
+            assert_eq!(r.status, st, "cone / |t_tr| = {f}");
+            // Continuous across the band: the traction is the trial to 1e-10.
+            for i in 0..3 {
+                assert!((r.traction[i] - r.trial[i]).abs() <= CONE_TIE * tn);
             }
         }
     }
