@@ -132,12 +132,14 @@ fn clap_one_line(e: &clap::Error) -> String {
         .join(" ")
 }
 
-/// Moves `--out DIR`, `--quiet` and `--no-figure` found among the PETSc options (after the case
-/// or study file) in front of that file, so clap sees them whatever their position.
+/// Moves `--out DIR` and `--quiet` (and for `run` `--no-figure`) found among the PETSc options
+/// (after the case or study file) in front of that file, so clap sees them whatever their
+/// position.
 fn pull_our_options(args: &[String]) -> Result<Vec<String>, String> {
     let Some(run_at) = args.iter().position(|a| a == "run" || a == "study") else {
         return Ok(args.to_vec());
     };
+    let is_run = args[run_at] == "run";
     let mut head: Vec<String> = args[..=run_at].to_vec();
     let mut rest: Vec<String> = Vec::new();
     let mut it = args[run_at + 1..].iter();
@@ -150,9 +152,8 @@ fn pull_our_options(args: &[String]) -> Result<Vec<String>, String> {
                     _ => return Err("--out needs a folder (--out DIR)".into()),
                 }
             }
-            s if s.starts_with("--out=") || matches!(s, "--quiet" | "-q" | "--no-figure") => {
-                head.push(a.clone())
-            }
+            s if s.starts_with("--out=") || matches!(s, "--quiet" | "-q") => head.push(a.clone()),
+            "--no-figure" if is_run => head.push(a.clone()),
             _ => rest.push(a.clone()),
         }
     }
@@ -438,5 +439,10 @@ mod tests {
             args("mortar run --no-figure --out d -q c.toml -snes_monitor -ksp_type preonly")
         );
         assert!(pull_our_options(&args("mortar study s.toml --out -q")).is_err());
+        // `study` has no `--no-figure`: left where it is.
+        assert_eq!(
+            pull_our_options(&args("mortar study s.toml --no-figure -q")).unwrap(),
+            args("mortar study -q s.toml --no-figure")
+        );
     }
 }

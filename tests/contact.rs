@@ -194,7 +194,8 @@ fn jacobian_test_ratios(stdout: &str) -> Vec<f64> {
 /// finite-difference perturbation of one dof crosses such a kink, that column differs by the
 /// jump (measured: none of 78 and 80 iterates above 1e-4 since the tie-break of the Coulomb
 /// law, `contact::law::CONE_TIE`; 4 of 100 before it, each with one bad column; the median is
-/// 2e-8), so the test bounds the median and the share of iterates above 1e-4.
+/// 2e-8), so the test bounds the median and the share of iterates above 1e-4 (1 in 40, which
+/// the tie-break keeps: at the start of a step round-off no longer picks the tangent).
 ///
 /// Run twice: as the slide is (the small upper block's surface secondary, fully covered), and
 /// with the sides swapped, so that the lower surface's nodes under the upper block's edges are
@@ -230,7 +231,7 @@ fn jacobian_matches_finite_differences(case: &std::path::Path) {
         "median ||J - Jfd|| / ||J|| = {median:e}; all: {ratios:?}"
     );
     assert!(
-        above * 20 <= ratios.len(),
+        above * 40 <= ratios.len(),
         "{above} of {} iterates above 1e-4: {ratios:?}",
         ratios.len()
     );
