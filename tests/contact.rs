@@ -244,10 +244,11 @@ fn jacobian_matches_finite_differences(case: &std::path::Path) {
 /// PETSc's finite-difference Jacobian (median below 1e-7, at most 1 iterate in 12 above 1e-4),
 /// and 1 against 2 ranks (1e-8), with friction and without (measured 3e-14 and 6e-16).
 ///
-/// Measured above 1e-4: 5 iterates of 72. Four (5 to 11) are the first iterates of steps 1 and 2;
-/// the fifth (1e7) is an iterate of a diverging full-step attempt (|F| = 3e4, redone with `l2`)
-/// where `||J - Jfd||` reaches 1e12: the residual jumps there, as a node's closest point changes
-/// segment (node-on-segment is only piecewise continuous), which no tangent can match.
+/// Measured above 1e-4: 5 iterates of 72. Four (5 to 11) are the first iterates of steps 1
+/// and 2; the fifth (above 1e7) is an iterate of a diverging full-step attempt (|F| = 3e4,
+/// redone with `l2`) where `||J - Jfd||` reaches 1e12: the residual jumps there, as a node's
+/// closest point changes segment (node-on-segment is only piecewise continuous), which no
+/// tangent can match.
 ///
 /// With friction the two rank counts used to part ways (7e-5 to 1e-4 apart): a node that slipped
 /// starts the next step with its trial on the Coulomb cone, and round-off picked its first

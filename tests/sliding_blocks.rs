@@ -123,11 +123,11 @@ const MORTAR_SMOOTHNESS: f64 = 3.0;
 /// most `END_GAME_ITERATIONS` = 3 iterations follow. Quadratic convergence takes a residual from
 /// 1e-2 of its scale to round-off (1e-13 of it here) in 2-3 (1e-2, 1e-4, 1e-8, 1e-16 with a
 /// constant near 1); a linear rate of 1e-3 needs 4. Measured: at most 2 in every one of 50
-/// solves (the test's 1-rank run, and a 2-rank run with `-snes_monitor`); with the Jacobian lagged by one iteration
-/// (`-snes_lag_jacobian 2`) up to 7. (The median of the three-point order estimate
-/// `log(r3 / r2) / log(r2 / r1)` over the last residuals, used before, could not tell those two
-/// apart: 1.84-1.86 against 1.67, since the last residual sits at round-off, and it moved by 0.3
-/// between machines.)
+/// solves (the test's 1-rank run, and a 2-rank run with `-snes_monitor`); with the Jacobian
+/// lagged by one iteration (`-snes_lag_jacobian 2`) up to 7. (The median of the three-point
+/// order estimate `log(r3 / r2) / log(r2 / r1)` over the last residuals, used before, could not
+/// tell those two apart: 1.84-1.86 against 1.67, since the last residual sits at round-off, and
+/// it moved by 0.3 between machines.)
 #[test]
 #[cfg_attr(
     debug_assertions,
