@@ -132,6 +132,48 @@ impl DofMap {
         }
     }
 
+    /// The six rigid body modes of the mesh (three translations, three rotations about the
+    /// centroid of its nodes, in the reference configuration) on the owned free dofs: the near
+    /// null space of elasticity that algebraic multigrid needs. With constrained dofs eliminated
+    /// and several bodies they are only *near* null, which is what multigrid asks for: it
+    /// restricts them to each aggregate, so one set serves every body.
+    pub fn rigid_body_modes(&self, mesh: &Mesh) -> Vec<Vec<f64>> {
+        let n = mesh.num_nodes().max(1) as f64;
+        let mut centre = [0.0; 3];
+        for x in &mesh.coords {
+            (0..3).for_each(|c| centre[c] += x[c] / n);
+        }
+        // Rotations in units of the mesh size, so that all six modes are of one magnitude.
+        let size = mesh
+            .coords
+            .iter()
+            .flat_map(|x| (0..3).map(move |c| (x[c] - centre[c]).abs()))
+            .fold(0.0, f64::max)
+            .max(f64::MIN_POSITIVE);
+        let mut modes = vec![vec![0.0; self.owned_count]; 6];
+        for (dof, &g) in self.global.iter().enumerate() {
+            let owned = self.owned_start..self.owned_start + self.owned_count;
+            if g < 0 || !owned.contains(&(g as usize)) {
+                continue;
+            }
+            let row = g as usize - self.owned_start;
+            let (v, c) = (dof / 3, dof % 3);
+            let r: [f64; 3] = std::array::from_fn(|k| (mesh.coords[v][k] - centre[k]) / size);
+            modes[c][row] = 1.0;
+            // Rotation about axis k: (e_k x r)_c.
+            for k in 0..3 {
+                let e = std::array::from_fn::<f64, 3, _>(|i| if i == k { 1.0 } else { 0.0 });
+                let cross = [
+                    e[1] * r[2] - e[2] * r[1],
+                    e[2] * r[0] - e[0] * r[2],
+                    e[0] * r[1] - e[1] * r[0],
+                ];
+                modes[3 + k][row] = cross[c];
+            }
+        }
+        modes
+    }
+
     /// The exact nonzero pattern of the owned rows, from the element stencils of the whole mesh.
     pub fn bulk_sparsity(&self, mesh: &Mesh) -> Sparsity {
         let node_elements = node_to_elements(mesh);
@@ -217,6 +259,39 @@ mod tests {
         assert_eq!(d0.owned_count + d1.owned_count, d0.total_free);
         for v in 0..4 {
             assert_eq!(d0.global[3 * v], -1);
+        }
+    }
+
+    /// The modes on the owned free dofs of two ranks: translations are 1 on their component,
+    /// rotations `e_k x (x - centre) / size`; constrained dofs have no row.
+    #[test]
+    fn rigid_body_modes_are_translations_and_rotations_about_the_centroid() {
+        let m = two_hexes();
+        let mut constrained = vec![false; 3 * m.num_nodes()];
+        constrained[0] = true;
+        // Centroid (1, 0.5, 0.5); the largest distance from it along an axis is 1.
+        let (centre, size) = ([1.0, 0.5, 0.5], 1.0);
+        for rank in 0..2 {
+            let d = DofMap::new(&m, vec![0, 1], rank, 2, &constrained);
+            let modes = d.rigid_body_modes(&m);
+            assert_eq!(modes.len(), 6);
+            let mut seen = 0;
+            for (dof, &g) in d.global.iter().enumerate() {
+                let owned = d.owned_start..d.owned_start + d.owned_count;
+                if g < 0 || !owned.contains(&(g as usize)) {
+                    continue;
+                }
+                let row = g as usize - d.owned_start;
+                seen += 1;
+                let (v, c) = (dof / 3, dof % 3);
+                let r: [f64; 3] = std::array::from_fn(|k| (m.coords[v][k] - centre[k]) / size);
+                let rotations = [[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]];
+                for k in 0..3 {
+                    assert_eq!(modes[k][row], if k == c { 1.0 } else { 0.0 });
+                    assert!((modes[3 + k][row] - rotations[k][c]).abs() < 1e-15);
+                }
+            }
+            assert_eq!(seen, d.owned_count);
         }
     }
 

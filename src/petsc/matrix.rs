@@ -199,6 +199,44 @@ impl Matrix {
         Ok(vals)
     }
 
+    /// Attaches a near null space (PETSc's `MatSetNearNullSpace`): for elasticity the rigid
+    /// body modes, which algebraic multigrid (`-pc_type gamg`) needs to build its coarse spaces;
+    /// direct solvers ignore it. `modes` hold the owned rows of each vector; they are
+    /// orthonormalized here (modified Gram-Schmidt), as PETSc requires. A mode that is
+    /// (numerically) in the span of the earlier ones is dropped. Collective.
+    pub fn set_near_null_space(&mut self, modes: &[Vec<f64>]) -> Result<()> {
+        let mut basis: Vec<super::Vector> = Vec::with_capacity(modes.len());
+        for mode in modes {
+            let mut v = super::Vector::new_mpi(mode.len())?;
+            v.with_local_mut(|local| local.copy_from_slice(mode))?;
+            let size = v.norm2()?;
+            for b in &basis {
+                let along = v.dot(b)?;
+                v.axpy(-along, b)?;
+            }
+            let rest = v.norm2()?;
+            // The same decision on every rank: the norms are global.
+            if rest <= 1e-10 * size || rest == 0.0 {
+                continue;
+            }
+            v.scale(1.0 / rest)?;
+            basis.push(v);
+        }
+        let raw: Vec<p::Vec> = basis.iter().map(|v| v.raw).collect();
+        let mut space: p::MatNullSpace = std::ptr::null_mut();
+        chk!(MatNullSpaceCreate(
+            super::comm(),
+            p::PetscBool::PETSC_FALSE,
+            to_petsc_int(raw.len())?,
+            raw.as_ptr(),
+            &mut space
+        ))?;
+        // The matrix takes its own reference to the space, the space to the vectors.
+        let attached = chk!(MatSetNearNullSpace(self.raw, space));
+        chk!(MatNullSpaceDestroy(&mut space))?;
+        attached
+    }
+
     /// `y = A x`.
     pub fn mult(&self, x: &super::Vector, y: &mut super::Vector) -> Result<()> {
         chk!(MatMult(self.raw, x.raw, y.raw))

@@ -122,6 +122,13 @@ impl Vector {
         chk!(VecScale(self.raw, alpha))
     }
 
+    /// The inner product `self . x` (collective).
+    pub fn dot(&self, x: &Vector) -> Result<f64> {
+        let mut d = 0.0;
+        chk!(VecDot(self.raw, x.raw, &mut d))?;
+        Ok(d)
+    }
+
     /// `self += alpha * x`.
     pub fn axpy(&mut self, alpha: f64, x: &Vector) -> Result<()> {
         chk!(VecAXPY(self.raw, alpha, x.raw))

@@ -152,7 +152,14 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         .commit(scene, &vec![0.0; 3 * scene.mesh.num_nodes()]);
     let mut sparsity = dofs.bulk_sparsity(&scene.mesh);
     model.tying.add_sparsity(&dofs, &mut sparsity);
-    let mut jac = Matrix::new_aij(&sparsity)?;
+    // Near null space for algebraic multigrid (ignored by the default direct solve).
+    let rigid_modes = dofs.rigid_body_modes(&scene.mesh);
+    let new_jacobian = |sparsity: &crate::petsc::Sparsity| -> Result<Matrix> {
+        let mut jac = Matrix::new_aij(sparsity)?;
+        jac.set_near_null_space(&rigid_modes)?;
+        Ok(jac)
+    };
+    let mut jac = new_jacobian(&sparsity)?;
     let mut x = Vector::new_mpi(dofs.owned_count)?;
     x.set_all(0.0)?;
     let scatter = Scatter::new(&x, &dofs.gathered_global)?;
@@ -232,7 +239,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                 let mut any = 0i32;
                 world.all_reduce_into(&(grew as i32), &mut any, SystemOperation::max());
                 if any > 0 {
-                    jac = Matrix::new_aij(&sparsity)?;
+                    jac = new_jacobian(&sparsity)?;
                     jac.allow_new_nonzeros()?;
                 }
             }
