@@ -20,6 +20,12 @@
 //! no allocation (the force vector and the tangent are allocated once per benchmark with the
 //! right shape, as the solver does). Geometry setup is outside the timed loop.
 //!
+//! - `assembly_scatter/<element>/<path>`: the other half of a Jacobian evaluation, the element
+//!   tangents added into the PETSc matrix (one rank, the mesh's exact pattern, zeroed and
+//!   assembled in each iteration; one dense tangent for every element, so only the scatter is
+//!   timed): `set_values` is `MatSetValues` per element, `owned_rows` the direct path the
+//!   solver uses (`petsc::OwnedRows`). Hex8 and Hex27.
+//!
 //! # Inputs
 //!
 //! The elements are not parallelepipeds: every node of the box mesh (mid-edge, face and centre
@@ -34,12 +40,14 @@
 use std::f64::consts::PI;
 use std::hint::black_box;
 
-use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use criterion::{BenchmarkId, Criterion, Throughput};
 use nalgebra::DMatrix;
 
+use mortar::dofs::DofMap;
 use mortar::fe::ElementType;
 use mortar::material::Material;
 use mortar::mesh::generate::box_mesh;
+use mortar::petsc::{Matrix, Petsc, PetscInt};
 use mortar::solid::{internal_force, ElementGeometry};
 
 /// A batch of elements of one type, ready for the kernel.
@@ -183,5 +191,55 @@ fn assembly(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, assembly);
-criterion_main!(benches);
+/// The element tangents scattered into a PETSc matrix, by `MatSetValues` and by the direct path.
+fn scatter(c: &mut Criterion) {
+    let mut group = c.benchmark_group("assembly_scatter");
+    for kind in [ElementType::Hex8, ElementType::Hex27] {
+        let mesh = box_mesh(kind, divisions(kind), [0.0; 3], [1.0; 3], "bench");
+        let ne = mesh.num_elements();
+        let dofs = DofMap::new(&mesh, vec![0; ne], 0, 1, &vec![false; 3 * mesh.num_nodes()]);
+        let mut jac = Matrix::new_aij(&dofs.bulk_sparsity(&mesh)).expect("a matrix");
+        let n = 3 * kind.num_nodes();
+        let tangent: Vec<f64> = (0..n * n).map(|k| jitter(k, 0)).collect();
+        let elements: Vec<Vec<PetscInt>> = (0..ne)
+            .map(|e| {
+                let mut idx = Vec::new();
+                dofs.element_dofs(mesh.element_nodes(e), &mut idx);
+                idx
+            })
+            .collect();
+        group.throughput(Throughput::Elements(ne as u64));
+        for path in ["set_values", "owned_rows"] {
+            group.bench_function(BenchmarkId::new(kind.name(), path), |bencher| {
+                bencher.iter(|| {
+                    jac.zero_entries().expect("zeroed");
+                    if path == "set_values" {
+                        for idx in &elements {
+                            jac.add_values(idx, idx, &tangent).expect("added");
+                        }
+                    } else {
+                        jac.with_owned_rows(|rows| {
+                            elements
+                                .iter()
+                                .try_for_each(|idx| rows.add(idx, idx, &tangent))
+                        })
+                        .expect("added");
+                    }
+                    jac.assemble().expect("assembled");
+                });
+            });
+        }
+    }
+    group.finish();
+}
+
+fn main() {
+    // PETSc (and MPI) for the scatter benchmarks, finalized after them.
+    let petsc = Petsc::initialize(&["bench".into()], None)
+        .unwrap_or_else(|e| panic!("PETSc initialization failed: {e}"));
+    let mut criterion = Criterion::default().configure_from_args();
+    assembly(&mut criterion);
+    scatter(&mut criterion);
+    criterion.final_summary();
+    drop(petsc);
+}

@@ -69,31 +69,34 @@ impl BlockSum {
         }
     }
 
-    /// Adds the sum into `jac` (not assembled): one `MatSetValues` per node row; constrained
-    /// dofs (global index -1) are left out by PETSc.
+    /// Adds the sum into `jac` (not assembled), one node row at a time: straight into the
+    /// stored rows this rank owns (`petsc::OwnedRows`), through PETSc's stash for the others;
+    /// constrained dofs (global index -1) are left out.
     pub fn add_to(&self, dofs: &DofMap, jac: &mut Matrix) -> Result<()> {
         let mut cols: Vec<PetscInt> = Vec::new();
         let mut vals: Vec<f64> = Vec::new();
-        for (node, row) in &self.rows {
-            let rows = &dofs.global[3 * node..3 * node + 3];
-            if rows.iter().all(|&g| g < 0) {
-                continue;
-            }
-            cols.clear();
-            cols.extend(
-                row.iter()
-                    .flat_map(|(c, _)| dofs.global[3 * c..3 * c + 3].iter().copied()),
-            );
-            vals.clear();
-            for i in 0..3 {
-                vals.extend(
+        jac.with_owned_rows(|owned| {
+            for (node, row) in &self.rows {
+                let rows = &dofs.global[3 * node..3 * node + 3];
+                if rows.iter().all(|&g| g < 0) {
+                    continue;
+                }
+                cols.clear();
+                cols.extend(
                     row.iter()
-                        .flat_map(|(_, b)| b[3 * i..3 * i + 3].iter().copied()),
+                        .flat_map(|(c, _)| dofs.global[3 * c..3 * c + 3].iter().copied()),
                 );
+                vals.clear();
+                for i in 0..3 {
+                    vals.extend(
+                        row.iter()
+                            .flat_map(|(_, b)| b[3 * i..3 * i + 3].iter().copied()),
+                    );
+                }
+                owned.add(rows, &cols, &vals)?;
             }
-            jac.add_values(rows, &cols, &vals)?;
-        }
-        Ok(())
+            Ok(())
+        })
     }
 
     /// The summed `3 x 3` block of rows of `row` and columns of `col` (zero if none).

@@ -13,6 +13,9 @@
 //! one rank than on two). With the pattern kept, the matrix's nonzero structure is also the same in
 //! every Newton iteration of a step, so the LU's symbolic factorization can be reused.
 //!
+//! **Owned entries.** The bulk and contact tangents add their blocks to the rows this rank owns
+//! straight into the stored values (`super::owned_rows`), not through `MatSetValues`.
+//!
 //! **Off-process entries.** On more than one rank, the entries a rank adds to rows another rank
 //! owns (element blocks along the partition boundary, and the contact rows of the nodes a rank
 //! holds: `contact::frictional`, "Parallel layout") travel through PETSc's original stash

@@ -158,21 +158,26 @@ impl Bulk {
         let mut fe = Vec::new();
         let mut ue = Vec::new();
         let mut ke = DMatrix::zeros(0, 0);
-        for (e, geom) in &self.elements {
-            let nodes = scene.mesh.element_nodes(*e);
-            gather_nodes(u, nodes, &mut ue);
-            fe.resize(3 * nodes.len(), 0.0);
-            let mat = &scene.materials[scene.mesh.body[*e]];
-            if let Err(det) = solid::internal_force(geom, mat, &ue, &mut fe, Some(&mut ke)) {
-                inverted.get_or_insert(Inverted { element: *e, det });
-                continue;
+        // The element blocks go straight into the stored rows (`petsc::OwnedRows`: the same
+        // sums as `MatSetValues`, without its per-entry search).
+        jac.with_owned_rows(|owned| {
+            for (e, geom) in &self.elements {
+                let nodes = scene.mesh.element_nodes(*e);
+                gather_nodes(u, nodes, &mut ue);
+                fe.resize(3 * nodes.len(), 0.0);
+                let mat = &scene.materials[scene.mesh.body[*e]];
+                if let Err(det) = solid::internal_force(geom, mat, &ue, &mut fe, Some(&mut ke)) {
+                    inverted.get_or_insert(Inverted { element: *e, det });
+                    continue;
+                }
+                dofs.element_dofs(nodes, &mut idx);
+                // nalgebra is column-major; PETSc takes row-major. The element tangent is
+                // symmetric but transpose anyway so a nonsymmetric law stays right.
+                let rows = ke.transpose();
+                owned.add(&idx, &idx, rows.as_slice())?;
             }
-            dofs.element_dofs(nodes, &mut idx);
-            // nalgebra is column-major; PETSc takes row-major. The element tangent is symmetric
-            // but transpose anyway so a nonsymmetric law stays right.
-            let rows = ke.transpose();
-            jac.add_values(&idx, &idx, rows.as_slice())?;
-        }
+            Ok(())
+        })?;
         for face in &self.faces {
             let (x, p) = self.face_state(scene, face, u, t);
             fe.resize(3 * face.nodes.len(), 0.0);
