@@ -14,7 +14,8 @@
 //! - a PETSc error (a nonzero outside the preallocated pattern) comes back as `Error::Petsc`
 //!   with PETSc's own message and the Rust call site;
 //! - blocks added straight into the stored rows (`Matrix::with_owned_rows`) give the matrix of
-//!   `MatSetValues` bit for bit (on one rank; two-rank scenes check its off-diagonal blocks).
+//!   `MatSetValues` bit for bit, on one rank and (`owned_rows_on_two_ranks`, under `mpirun`)
+//!   on two, where the stash and the off-diagonal blocks come in.
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
@@ -195,7 +196,7 @@ fn petsc_layer_boundary_behaviour() {
     // matrix of `MatSetValues`, bit for bit: rows of node-like column runs, constrained
     // (negative) indices, columns in any order, and entries outside the pattern (kept aside,
     // then added through `MatSetValues`).
-    owned_rows_match_set_values();
+    owned_rows_match_set_values(&petsc);
 
     drop(ksp);
     drop(a);
@@ -205,20 +206,25 @@ fn petsc_layer_boundary_behaviour() {
     drop(petsc);
 }
 
-/// Check 8 (see `petsc_layer_boundary_behaviour`).
-fn owned_rows_match_set_values() {
+/// Check 8 (see `petsc_layer_boundary_behaviour`), on this process's share of the rows (all
+/// of them on one rank; `owned_rows_on_two_ranks` runs it on two).
+fn owned_rows_match_set_values(petsc: &Petsc) {
     const ROWS: i32 = 30;
+    let (rank, size) = (petsc.rank() as i32, petsc.size() as i32);
+    // Contiguous ownership in whole nodes: 10 nodes of 3 rows, split between the ranks.
+    let first = 3 * (10 * rank / size);
+    let end = 3 * (10 * (rank + 1) / size);
     // Node-like pattern: rows in triples, each triple coupled to the triples within 2 of it.
     let pattern = Sparsity {
-        row_start: 0,
-        rows: (0..ROWS)
+        row_start: first as usize,
+        rows: (first..end)
             .map(|r| {
                 let node = r / 3;
                 (0..ROWS).filter(|c| (c / 3 - node).abs() <= 2).collect()
             })
             .collect(),
     };
-    // A deterministic stream of values.
+    // A deterministic stream of values, the same on every rank.
     let mut seed = 12345u64;
     let mut next = move || {
         seed = seed
@@ -226,6 +232,8 @@ fn owned_rows_match_set_values() {
             .wrapping_add(1442695040888963407);
         (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
     };
+    // Every rank adds every block: on two ranks half the rows of each are the other rank's
+    // (they go through the stash) and the columns span both ranks (off-diagonal blocks).
     let mut blocks: Vec<(Vec<i32>, Vec<f64>)> = Vec::new();
     for first in 0..8 {
         // Three nodes, one dof constrained (-1), in a shuffled node order.
@@ -237,7 +245,8 @@ fn owned_rows_match_set_values() {
         let vals = (0..idx.len() * idx.len()).map(|_| next()).collect();
         blocks.push((idx, vals));
     }
-    // Outside the pattern: rows 0..3 against columns of node 9.
+    // Outside the pattern: rows and columns {0, 1, 2, 27} (node 0 against a dof of node 9,
+    // in another rank's columns on two ranks).
     let outside = (
         vec![0, 1, 27, 2],
         (0..16).map(|_| next()).collect::<Vec<f64>>(),
@@ -246,29 +255,86 @@ fn owned_rows_match_set_values() {
         let mut m = Matrix::new_aij(&pattern).unwrap();
         m.allow_new_nonzeros().unwrap();
         for _ in 0..2 {
-            // Twice: the second sum lands on the values of the first assembly.
-            if direct {
-                m.with_owned_rows(|rows| {
+            // Twice: the second sum lands on the values of the first assembly. Within one
+            // assembly the blocks come twice, the second time after the entries outside the
+            // pattern were inserted (rows with gaps, on two ranks no off-diagonal column map):
+            // `with_owned_rows` must then fall back to `MatSetValues`.
+            for with_outside in [true, false] {
+                if direct {
+                    m.with_owned_rows(|rows| {
+                        for (idx, vals) in &blocks {
+                            rows.add(idx, idx, vals)?;
+                        }
+                        if with_outside {
+                            rows.add(&outside.0, &outside.0, &outside.1)?;
+                        }
+                        Ok(())
+                    })
+                    .unwrap();
+                } else {
                     for (idx, vals) in &blocks {
-                        rows.add(idx, idx, vals)?;
+                        m.add_values(idx, idx, vals).unwrap();
                     }
-                    rows.add(&outside.0, &outside.0, &outside.1)
-                })
-                .unwrap();
-            } else {
-                for (idx, vals) in &blocks {
-                    m.add_values(idx, idx, vals).unwrap();
+                    if with_outside {
+                        m.add_values(&outside.0, &outside.0, &outside.1).unwrap();
+                    }
                 }
-                m.add_values(&outside.0, &outside.0, &outside.1).unwrap();
             }
             m.assemble().unwrap();
         }
+        let owned: Vec<i32> = (first..end).collect();
         let all: Vec<i32> = (0..ROWS).collect();
-        m.get_values(&all, &all).unwrap()
+        m.get_values(&owned, &all).unwrap()
     };
     let (by_rows, by_set_values) = (build(true), build(false));
-    assert!(by_set_values.iter().filter(|v| **v != 0.0).count() > 300);
+    assert!(by_set_values.iter().filter(|v| **v != 0.0).count() > 300 / size as usize);
     for (k, (a, b)) in by_rows.iter().zip(&by_set_values).enumerate() {
-        assert_eq!(a.to_bits(), b.to_bits(), "entry ({}, {})", k / 30, k % 30);
+        let (row, col) = (first + k as i32 / ROWS, k as i32 % ROWS);
+        assert_eq!(
+            a.to_bits(),
+            b.to_bits(),
+            "entry ({row}, {col}) on rank {rank}"
+        );
     }
+}
+
+/// Set in the environment of the two-rank run of `owned_rows_on_two_ranks`.
+const WORKER: &str = "MORTAR_PETSC_LAYER_WORKER";
+
+/// Check 8 on two ranks: this test runs itself under `mpirun -n 2`, where each rank compares
+/// its owned rows (stash, off-diagonal blocks and their column map included).
+#[test]
+fn owned_rows_on_two_ranks() {
+    if std::env::var_os(WORKER).is_some() {
+        let petsc = Petsc::initialize(&["petsc_layer".into()], None).unwrap();
+        owned_rows_match_set_values(&petsc);
+        drop(petsc);
+        return;
+    }
+    let out = std::process::Command::new("mpirun")
+        .args([
+            "-n",
+            "2",
+            "--oversubscribe",
+            "--bind-to",
+            "none",
+            "--timeout",
+            "120",
+        ])
+        .arg(std::env::current_exe().unwrap())
+        .args(["owned_rows_on_two_ranks", "--exact", "--nocapture"])
+        .env(WORKER, "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .env("OMPI_MCA_mpi_yield_when_idle", "1")
+        .output()
+        .expect("cannot start mpirun");
+    let text =
+        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "two-rank run failed:\n{text}");
+    assert_eq!(
+        text.matches("test owned_rows_on_two_ranks ... ok").count(),
+        2,
+        "both ranks ran the check:\n{text}"
+    );
 }

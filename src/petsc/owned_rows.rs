@@ -14,7 +14,11 @@
 //! - Entries of rows other ranks own go through `MatSetValues` (PETSc's stash), as before.
 //! - An entry outside the stored pattern (possible once a matrix allows new nonzeros) is kept
 //!   aside and added with `MatSetValues` after the arrays are handed back: inserting it while
-//!   they are held would reallocate them.
+//!   they are held would reallocate them. Until the next assembly the rows then have gaps (and
+//!   on more than one rank the off-diagonal block loses its column map), so a later
+//!   [`Matrix::with_owned_rows`] before that assembly adds everything through `MatSetValues`.
+//! - The arrays are handed back on drop, so also on an error or a panic in the closure.
+//! - Checked against `MatSetValues` bit for bit on one and two ranks (`tests/petsc_layer.rs`).
 //! - The sums are those of `MatSetValues` bit for bit: each stored entry receives the same
 //!   additions in the same order.
 //! - Matrices of other types (none are made here, but an option could make one) take the plain
@@ -195,7 +199,8 @@ impl Block<'_> {
     }
 }
 
-/// A sequential AIJ block's compressed rows and values, held until [`HeldBlock::release`].
+/// A sequential AIJ block's compressed rows and values, handed back to PETSc on drop (also on
+/// an error or a panic inside the closure).
 struct HeldBlock {
     mat: p::Mat,
     rows: PetscInt,
@@ -206,22 +211,16 @@ struct HeldBlock {
 
 impl HeldBlock {
     fn get(mat: p::Mat) -> Result<HeldBlock> {
-        let mut held = HeldBlock {
-            mat,
-            rows: 0,
-            starts: std::ptr::null(),
-            columns: std::ptr::null(),
-            values: std::ptr::null_mut(),
-        };
+        let (mut rows, mut starts, mut columns) = (0, std::ptr::null(), std::ptr::null());
         let mut done = p::PetscBool::PETSC_FALSE;
         chk!(MatGetRowIJ(
             mat,
             0,
             p::PetscBool::PETSC_FALSE,
             p::PetscBool::PETSC_FALSE,
-            &mut held.rows,
-            &mut held.starts,
-            &mut held.columns,
+            &mut rows,
+            &mut starts,
+            &mut columns,
             &mut done
         ))?;
         if done != p::PetscBool::PETSC_TRUE {
@@ -229,15 +228,37 @@ impl HeldBlock {
                 "MatGetRowIJ: no compressed rows for this matrix block".into(),
             ));
         }
+        let mut held = HeldBlock {
+            mat,
+            rows,
+            starts,
+            columns,
+            values: std::ptr::null_mut(),
+        };
         chk!(MatSeqAIJGetArray(mat, &mut held.values))?;
         Ok(held)
+    }
+
+    /// True if the rows are stored back to back (`starts[rows]` = the entries in use): so after
+    /// an assembly, not after an insertion outside the pattern, which leaves room at row ends.
+    fn is_compact(&self) -> Result<bool> {
+        let mut info = std::mem::MaybeUninit::<p::MatInfo>::uninit();
+        chk!(MatGetInfo(
+            self.mat,
+            p::MatInfoType::MAT_LOCAL,
+            info.as_mut_ptr()
+        ))?;
+        // SAFETY: MatGetInfo filled `info`; `starts` has `rows + 1` entries.
+        let used = unsafe { info.assume_init() }.nz_used;
+        let stored = unsafe { *self.starts.add(self.rows as usize) };
+        Ok(stored as f64 == used)
     }
 
     /// The block as slices.
     ///
     /// # Safety
-    /// Valid until [`HeldBlock::release`]; PETSc's arrays are not reallocated meanwhile (no
-    /// entry is inserted into the local rows while they are held).
+    /// Valid while `self` lives; PETSc's arrays are not reallocated meanwhile (no entry is
+    /// inserted into the local rows while they are held).
     unsafe fn block<'a>(&self) -> Block<'a> {
         let rows = self.rows as usize;
         let starts = std::slice::from_raw_parts(self.starts, rows + 1);
@@ -256,28 +277,59 @@ impl HeldBlock {
             values,
         }
     }
+}
 
-    fn release(mut self) -> Result<()> {
-        chk!(MatSeqAIJRestoreArray(self.mat, &mut self.values))?;
+impl Drop for HeldBlock {
+    fn drop(&mut self) {
         let mut done = p::PetscBool::PETSC_FALSE;
-        chk!(MatRestoreRowIJ(
-            self.mat,
-            0,
-            p::PetscBool::PETSC_FALSE,
-            p::PetscBool::PETSC_FALSE,
-            &mut self.rows,
-            &mut self.starts,
-            &mut self.columns,
-            &mut done
-        ))
+        // SAFETY: `mat` is the block these arrays were taken from, still alive (its matrix is
+        // borrowed by `with_owned_rows`).
+        let codes = unsafe {
+            [
+                p::MatSeqAIJRestoreArray(self.mat, &mut self.values),
+                p::MatRestoreRowIJ(
+                    self.mat,
+                    0,
+                    p::PetscBool::PETSC_FALSE,
+                    p::PetscBool::PETSC_FALSE,
+                    &mut self.rows,
+                    &mut self.starts,
+                    &mut self.columns,
+                    &mut done,
+                ),
+            ]
+        };
+        if codes.iter().any(|&c| c != 0) {
+            eprintln!("warning: handing a matrix block back to PETSc failed: {codes:?}");
+        }
+    }
+}
+
+impl<'a> OwnedRows<'a> {
+    /// Every entry through `MatSetValues` (a matrix type without direct access, or rows not
+    /// stored back to back).
+    fn plain(raw: p::Mat) -> OwnedRows<'a> {
+        OwnedRows {
+            raw,
+            rows: 0..0,
+            columns: 0..0,
+            diagonal: Block {
+                starts: &[0],
+                columns: &[],
+                values: &mut [],
+            },
+            off_diagonal: None,
+            outside: Vec::new(),
+            hints: Vec::new(),
+        }
     }
 }
 
 impl Matrix {
     /// Runs `f` with direct access to the stored values of the owned rows (module docs), then
-    /// adds the entries `f` put outside the stored pattern. Not collective; the matrix must
-    /// have been assembled once (its pattern exists). On a matrix that is neither `seqaij` nor
-    /// `mpiaij`, [`OwnedRows::add`] is `MatSetValues`.
+    /// adds the entries `f` put outside the stored pattern. Not collective. Direct access needs
+    /// a `seqaij` or `mpiaij` matrix whose rows are stored back to back (assembled since any
+    /// insertion outside its pattern); otherwise [`OwnedRows::add`] is `MatSetValues`.
     pub fn with_owned_rows<R>(
         &mut self,
         f: impl FnOnce(&mut OwnedRows<'_>) -> Result<R>,
@@ -294,39 +346,30 @@ impl Matrix {
                 chk!(MatMPIAIJGetSeqAIJ(self.raw, &mut ad, &mut ao, &mut map))?;
                 (ad, Some(ao), map)
             }
-            _ => {
-                return f(&mut OwnedRows {
-                    raw: self.raw,
-                    rows: 0..0,
-                    columns: 0..0,
-                    diagonal: Block {
-                        starts: &[0],
-                        columns: &[],
-                        values: &mut [],
-                    },
-                    off_diagonal: None,
-                    outside: Vec::new(),
-                    hints: Vec::new(),
-                })
-            }
+            _ => return f(&mut OwnedRows::plain(self.raw)),
         };
         let (mut lo, mut hi): (PetscInt, PetscInt) = (0, 0);
         chk!(MatGetOwnershipRange(self.raw, &mut lo, &mut hi))?;
         let diagonal = HeldBlock::get(diagonal)?;
-        let off_diagonal = match off_diagonal.map(HeldBlock::get).transpose() {
-            Ok(o) => o,
-            Err(e) => {
-                diagonal.release()?;
-                return Err(e);
-            }
-        };
+        let off_diagonal = off_diagonal.map(HeldBlock::get).transpose()?;
         let mut off_columns: PetscInt = 0;
         if let Some(o) = &off_diagonal {
             chk!(MatGetSize(o.mat, std::ptr::null_mut(), &mut off_columns))?;
         }
+        // An insertion outside the pattern since the last assembly leaves gaps in the rows and,
+        // on more than one rank, may drop the off-diagonal column map (`MatDisAssemble`).
+        let mut direct = diagonal.is_compact()?;
+        if let Some(o) = &off_diagonal {
+            direct = direct && o.is_compact()? && (off_columns == 0 || !map.is_null());
+        }
+        if !direct {
+            drop((diagonal, off_diagonal));
+            return f(&mut OwnedRows::plain(self.raw));
+        }
         let (result, outside) = {
-            // SAFETY: the blocks stay held until released below, and nothing inserts into
-            // the local rows meanwhile (entries outside the pattern are kept aside).
+            // SAFETY: the blocks stay held until dropped below, and nothing inserts into the
+            // local rows meanwhile (entries outside the pattern are kept aside); the map has
+            // `off_columns` entries (checked non-null above).
             let mut rows = OwnedRows {
                 raw: self.raw,
                 rows: lo..hi,
@@ -346,10 +389,7 @@ impl Matrix {
             let result = f(&mut rows);
             (result, std::mem::take(&mut rows.outside))
         };
-        diagonal.release()?;
-        if let Some(o) = off_diagonal {
-            o.release()?;
-        }
+        drop((diagonal, off_diagonal));
         let result = result?;
         for (row, col, v) in outside {
             self.add_values(&[row], &[col], &[v])?;
