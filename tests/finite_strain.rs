@@ -113,28 +113,7 @@ fn column(out: &std::path::Path, name: &str) -> usize {
 fn cantilever_under_follower_pressure_converges_quadratically() {
     let case = common::write_case(
         "finite_cantilever",
-        r#"
-[[mesh]]
-body = "beam"
-generator = "beam"
-element = "hex20"
-divisions = [10, 1, 2]
-length = 10.0
-width = 1.0
-height = 1.0
-[[material]]
-model = "neo_hookean"
-young = 1000.0
-poisson = 0.3
-[[dirichlet]]
-set = "beam.xmin"
-components = ["x", "y", "z"]
-[[pressure]]
-set = "beam.zmax"
-value = 0.3
-[steps]
-count = 6
-"#,
+        &common::cantilever_case("hex20", [10, 1, 2], 6),
     );
     let (out, _) = common::run_case(&case, 1, &["-q"]);
     let its = common::converged_newton_its(&out);

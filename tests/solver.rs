@@ -283,30 +283,8 @@ fn an_under_constrained_body_is_reported() {
 /// to 1e-6.
 #[test]
 fn algebraic_multigrid_gets_the_rigid_body_modes() {
-    let toml = r#"
-name = "amg_beam"
-[[mesh]]
-body = "beam"
-generator = "beam"
-element = "hex8"
-divisions = [20, 2, 2]
-length = 10.0
-width = 1.0
-height = 1.0
-[[material]]
-model = "neo_hookean"
-young = 1000.0
-poisson = 0.3
-[[dirichlet]]
-set = "beam.xmin"
-components = ["x", "y", "z"]
-[[pressure]]
-set = "beam.zmax"
-value = 0.3
-[steps]
-count = 2
-"#;
-    let case = common::write_case("amg_rigid_modes", toml);
+    let toml = common::cantilever_case("hex8", [20, 2, 2], 2);
+    let case = common::write_case("amg_rigid_modes", &toml);
     let (direct, _) = common::run_case(&case, 1, &["-q"]);
     let reference = common::displacements(&direct);
     let amg = [

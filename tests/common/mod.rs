@@ -303,3 +303,33 @@ count = {steps}
 "#
     )
 }
+
+/// The cantilever of `cases/cantilever`: a 10 x 1 x 1 beam of `element`, clamped at x = 0, a
+/// follower pressure 0.3 on its top face, compressible Neo-Hookean (E = 1000, nu = 0.3).
+pub fn cantilever_case(element: &str, divisions: [usize; 3], steps: usize) -> String {
+    format!(
+        r#"
+[[mesh]]
+body = "beam"
+generator = "beam"
+element = "{element}"
+divisions = [{}, {}, {}]
+length = 10.0
+width = 1.0
+height = 1.0
+[[material]]
+model = "neo_hookean"
+young = 1000.0
+poisson = 0.3
+[[dirichlet]]
+set = "beam.xmin"
+components = ["x", "y", "z"]
+[[pressure]]
+set = "beam.zmax"
+value = 0.3
+[steps]
+count = {steps}
+"#,
+        divisions[0], divisions[1], divisions[2]
+    )
+}
