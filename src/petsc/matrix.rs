@@ -164,15 +164,7 @@ impl Matrix {
             vals.len(),
             "Matrix::add_values: wrong block size"
         );
-        chk!(MatSetValues(
-            self.raw,
-            to_petsc_int(rows.len())?,
-            rows.as_ptr(),
-            to_petsc_int(cols.len())?,
-            cols.as_ptr(),
-            vals.as_ptr(),
-            p::InsertMode::ADD_VALUES
-        ))
+        add_values_raw(self.raw, rows, cols, vals)
     }
 
     /// Final assembly (communicates off-rank entries).
@@ -244,6 +236,24 @@ impl Matrix {
     pub fn mult(&self, x: &super::Vector, y: &mut super::Vector) -> Result<()> {
         chk!(MatMult(self.raw, x.raw, y.raw))
     }
+}
+
+/// `MatSetValues` with `ADD_VALUES` of a dense row-major block (sizes checked by the callers).
+pub(super) fn add_values_raw(
+    raw: p::Mat,
+    rows: &[PetscInt],
+    cols: &[PetscInt],
+    vals: &[f64],
+) -> Result<()> {
+    chk!(MatSetValues(
+        raw,
+        to_petsc_int(rows.len())?,
+        rows.as_ptr(),
+        to_petsc_int(cols.len())?,
+        cols.as_ptr(),
+        vals.as_ptr(),
+        p::InsertMode::ADD_VALUES
+    ))
 }
 
 impl Drop for Matrix {

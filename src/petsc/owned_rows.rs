@@ -28,7 +28,7 @@ use std::ops::Range;
 
 use petsc_ffi as p;
 
-use super::{chk, to_petsc_int, Matrix, PetscInt};
+use super::{chk, Matrix, PetscInt};
 use crate::error::Result;
 
 /// One compressed block (diagonal or off-diagonal) of the owned rows.
@@ -84,15 +84,7 @@ impl OwnedRows<'_> {
                 continue;
             }
             if !self.rows.contains(&row) {
-                chk!(MatSetValues(
-                    self.raw,
-                    1,
-                    &row,
-                    to_petsc_int(cols.len())?,
-                    cols.as_ptr(),
-                    line.as_ptr(),
-                    p::InsertMode::ADD_VALUES
-                ))?;
+                super::matrix::add_values_raw(self.raw, &[row], cols, line)?;
                 continue;
             }
             let local = (row - self.rows.start) as usize;
