@@ -793,7 +793,11 @@ impl ContactInterfaces {
         sparsity: &mut Sparsity,
     ) -> bool {
         let x = current_positions(scene, u);
-        let mut extra: BTreeMap<usize, Vec<PetscInt>> = BTreeMap::new();
+        let owned = dofs.owned_start..dofs.owned_start + dofs.owned_count;
+        let owns = |g: PetscInt| g >= 0 && owned.contains(&(g as usize));
+        // The nodes each node with an owned dof couples to, gathered per node: the three dofs
+        // of a node share their columns, and a node lies in many stencils.
+        let mut coupled: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
         for pass in self.interfaces.iter().flat_map(|i| i.passes.iter()) {
             let mut stencil = match pass.method {
                 ContactMethod::Mortar => pass.mortar_stencils(&x),
@@ -802,30 +806,29 @@ impl ContactInterfaces {
             for nodes in &mut stencil {
                 nodes.sort_unstable();
                 nodes.dedup();
-                let cols: Vec<PetscInt> = global_dofs(dofs, nodes)
-                    .into_iter()
-                    .filter(|&g| g >= 0)
-                    .collect();
-                for g in cols.iter().copied() {
-                    let owned = (g as usize) >= dofs.owned_start
-                        && (g as usize) < dofs.owned_start + dofs.owned_count;
-                    if owned {
-                        extra
-                            .entry(g as usize - dofs.owned_start)
-                            .or_default()
-                            .extend(&cols);
+                for &n in nodes.iter() {
+                    if dofs.global[3 * n..3 * n + 3].iter().any(|&g| owns(g)) {
+                        coupled.entry(n).or_default().extend_from_slice(nodes);
                     }
                 }
             }
         }
         let mut grew = false;
-        for (r, cols) in extra {
-            let row = &mut sparsity.rows[r];
-            let before = row.len();
-            row.extend(cols);
-            row.sort_unstable();
-            row.dedup();
-            grew |= row.len() != before;
+        for (n, mut nodes) in coupled {
+            nodes.sort_unstable();
+            nodes.dedup();
+            let cols: Vec<PetscInt> = global_dofs(dofs, &nodes)
+                .into_iter()
+                .filter(|&g| g >= 0)
+                .collect();
+            for &g in dofs.global[3 * n..3 * n + 3].iter().filter(|&&g| owns(g)) {
+                let row = &mut sparsity.rows[g as usize - dofs.owned_start];
+                let before = row.len();
+                row.extend_from_slice(&cols);
+                row.sort_unstable();
+                row.dedup();
+                grew |= row.len() != before;
+            }
         }
         grew
     }
@@ -2322,6 +2325,49 @@ friction = 0.3
                     }
                 }
             }
+        }
+    }
+
+    /// The contact pattern of [`ContactInterfaces::add_sparsity`] is the dof-by-dof one: every
+    /// free dof of a stencil couples to every free dof of it, in the rows this rank owns,
+    /// added to the bulk pattern; on each rank of a two-rank layout. A second call at the same
+    /// state adds nothing.
+    #[test]
+    fn contact_pattern_couples_every_dof_of_a_stencil() {
+        let scene = partly_covered_blocks();
+        let u = vec![0.0; 3 * scene.mesh.num_nodes()];
+        let x = super::current_positions(&scene, &u);
+        let half = scene.mesh.num_elements() / 2;
+        for rank in 0..2 {
+            let elements = (0..scene.mesh.num_elements())
+                .map(|e| usize::from(e >= half))
+                .collect();
+            let dofs = DofMap::new(&scene.mesh, elements, rank, 2, &scene.constrained_mask());
+            let contact = ContactInterfaces::new(&scene, &dofs).unwrap();
+            let owned = dofs.owned_start..dofs.owned_start + dofs.owned_count;
+            let mut expected = dofs.bulk_sparsity(&scene.mesh);
+            let mut added = 0;
+            for pass in contact.interfaces.iter().flat_map(|i| &i.passes) {
+                for nodes in pass.mortar_stencils(&x) {
+                    let cols: Vec<_> = super::global_dofs(&dofs, &nodes)
+                        .into_iter()
+                        .filter(|&g| g >= 0)
+                        .collect();
+                    for &g in cols.iter().filter(|&&g| owned.contains(&(g as usize))) {
+                        expected.rows[g as usize - dofs.owned_start].extend(&cols);
+                        added += 1;
+                    }
+                }
+            }
+            assert!(added > 0, "rank {rank}: no contact rows owned");
+            for row in &mut expected.rows {
+                row.sort_unstable();
+                row.dedup();
+            }
+            let mut sparsity = dofs.bulk_sparsity(&scene.mesh);
+            assert!(contact.add_sparsity(&scene, &dofs, &u, &mut sparsity));
+            assert_eq!(sparsity.rows, expected.rows, "rank {rank}");
+            assert!(!contact.add_sparsity(&scene, &dofs, &u, &mut sparsity));
         }
     }
 

@@ -346,7 +346,7 @@ pub struct InterfaceSpec {
     /// sticking). Default 1: a sticking node is then about as stiff as the element layer under
     /// it. Much stiffer sticking makes full Newton steps jump over the small stick region of a
     /// node and cycle between slip in opposite directions (measured on the sliding blocks:
-    /// alpha_T = 1 converges in at most 7 iterations per step, alpha_T = 3 and 10 fail at every
+    /// alpha_T = 1 converges in at most 6 iterations per step, alpha_T = 3 and 10 fail at every
     /// cut of the first step); the slip that a sticking node keeps under penalty is removed by
     /// the Uzawa updates of one-pass interfaces.
     pub tangential_penalty: Option<f64>,
