@@ -17,6 +17,17 @@ use crate::mesh::{FaceRef, Mesh};
 const MAX_NEWTON_ITS: usize = 10_000;
 /// Largest accepted `steps.count`.
 const MAX_STEPS: usize = 1_000_000;
+
+/// The smallest load step that cutting may reach (`1 / steps.count / 2^max_cuts`): smaller
+/// steps no longer move the load in floating point.
+const MIN_STEP: f64 = 1e-12;
+
+/// Most Uzawa augmentations per step (`interface.uzawa_max`).
+const MAX_UZAWA: usize = 1000;
+
+/// Bounds of an interface's penalty factor (times E/h): beyond them the contact stiffness
+/// swamps or vanishes against the bulk's in double precision.
+const PENALTY_RANGE: (f64, f64) = (1e-6, 1e12);
 /// Largest mesh a generator may build (hexahedra per part), so a typo in `divisions` is an
 /// error rather than an exhausted memory.
 const MAX_GENERATED_ELEMENTS: usize = 20_000_000;
@@ -301,6 +312,9 @@ impl Scene {
             file: path.to_path_buf(),
             msg,
         };
+        if let Some(given) = &file.name {
+            check_file_name(given).map_err(|e| err(format!("name = \"{given}\": {e}")))?;
+        }
         let name = file.name.clone().unwrap_or_else(|| {
             dir.file_name()
                 .map(|s| s.to_string_lossy().into_owned())
@@ -391,6 +405,20 @@ impl Scene {
                 .collect::<Result<_>>()?;
             if comps.is_empty() {
                 return Err(err(format!("{key}.components: empty")));
+            }
+            if let Some(c) = (1..comps.len()).find(|&k| comps[..k].contains(&comps[k])) {
+                return Err(err(format!(
+                    "{key}.components: \"{}\" is given twice",
+                    d.components[c]
+                )));
+            }
+            if d.gradient
+                .iter()
+                .flatten()
+                .flatten()
+                .any(|g| !g.is_finite())
+            {
+                return Err(err(format!("{key}.gradient: entries must be finite")));
             }
             if d.value.is_some() && d.gradient.is_some() {
                 return Err(err(format!("{key}: give value or gradient, not both")));
@@ -521,6 +549,15 @@ impl Scene {
             .map(|(i, spec)| build_interface(spec, i, &mesh))
             .collect::<std::result::Result<Vec<_>, String>>()
             .map_err(err)?;
+        for (i, iface) in interfaces.iter().enumerate() {
+            if interfaces[..i].iter().any(|o| o.name == iface.name) {
+                return Err(err(format!(
+                    "interface[{i}].name = \"{}\": another interface has this name (it names \
+                     output files and history columns)",
+                    iface.name
+                )));
+            }
+        }
         if file.steps.count == 0 {
             return Err(err("steps.count must be at least 1".into()));
         }
@@ -543,6 +580,15 @@ impl Scene {
                 file.steps.count
             )));
         }
+        let smallest_step =
+            0.5f64.powi(file.steps.max_cuts.min(1100) as i32) / file.steps.count as f64;
+        if smallest_step < MIN_STEP {
+            return Err(err(format!(
+                "steps.max_cuts = {}: with steps.count = {} the smallest step would be {smallest_step:.3e} \
+                 of the load, below {MIN_STEP:e}, where the load no longer advances in floating point",
+                file.steps.max_cuts, file.steps.count
+            )));
+        }
         let verification = match &file.verification {
             None => None,
             Some(v) => Some(build_verification(v, &interfaces, &mesh, &materials).map_err(err)?),
@@ -554,6 +600,9 @@ impl Scene {
         }
         let mut tracked = Vec::new();
         for (i, name) in file.output.track.iter().enumerate() {
+            if file.output.track[..i].contains(name) {
+                return Err(err(format!("output.track[{i}]: '{name}' is tracked twice")));
+            }
             let nodes = mesh
                 .nodes_of_set(name)
                 .map_err(|e| err(format!("output.track[{i}]: {e}")))?;
@@ -635,6 +684,7 @@ fn build_interface(
     mesh: &Mesh,
 ) -> std::result::Result<Interface, String> {
     let key = format!("interface[{i}]");
+    check_file_name(&spec.name).map_err(|e| format!("{key}.name = \"{}\": {e}", spec.name))?;
     let kind = match spec.kind.as_str() {
         "tied" => InterfaceKind::Tied,
         "contact" => InterfaceKind::Contact,
@@ -715,10 +765,13 @@ fn build_interface(
             Err(format!("{key}.{name} = {v}: must be finite and > 0"))
         }
     };
-    let penalty = positive(
-        "penalty",
-        spec.penalty.unwrap_or(if contact { 100.0 } else { 1000.0 }),
-    )?;
+    let penalty = spec.penalty.unwrap_or(if contact { 100.0 } else { 1000.0 });
+    if !(PENALTY_RANGE.0..=PENALTY_RANGE.1).contains(&penalty) {
+        return Err(format!(
+            "{key}.penalty = {penalty}: must lie in [{:e}, {:e}] (a factor of E/h)",
+            PENALTY_RANGE.0, PENALTY_RANGE.1
+        ));
+    }
     let uzawa_tol = positive(
         "uzawa_tol",
         spec.uzawa_tol.unwrap_or(if contact { 1e-6 } else { 1e-12 }),
@@ -760,6 +813,11 @@ fn build_interface(
         (InterfaceKind::Contact, _) => 10,
         (InterfaceKind::Tied, _) => 50,
     });
+    if uzawa_max > MAX_UZAWA {
+        return Err(format!(
+            "{key}.uzawa_max = {uzawa_max}: at most {MAX_UZAWA} augmentations per step"
+        ));
+    }
     Ok(Interface {
         kind,
         name: spec.name.clone(),
@@ -780,6 +838,24 @@ fn build_interface(
         penalty_growth,
         penalty_growth_cap,
     })
+}
+
+/// A name that becomes part of output file names (the scene's, an interface's): not empty,
+/// not hidden (a leading `.`), and no path separators or control characters, so that every
+/// file stays inside the output folder.
+fn check_file_name(name: &str) -> std::result::Result<(), String> {
+    if name.is_empty() {
+        Err("must not be empty (it names output files)".into())
+    } else if name.starts_with('.') {
+        Err("must not start with '.' (it names output files)".into())
+    } else if name
+        .chars()
+        .any(|c| c == '/' || c == '\\' || c.is_control())
+    {
+        Err("must not contain '/', '\\' or control characters (it names output files)".into())
+    } else {
+        Ok(())
+    }
 }
 
 fn axis(s: &str) -> Option<usize> {
@@ -864,8 +940,11 @@ fn build_verification(
                     )
                 }
             };
-            if !(a > 0.0 && b > a) {
-                return Err(format!("verification: radii must satisfy 0 < inner_radius < outer_radius (got {a}, {b})"));
+            if !(a > 0.0 && b > a && b.is_finite()) {
+                return Err(format!("verification: radii must be finite with 0 < inner_radius < outer_radius (got {a}, {b})"));
+            }
+            if !p.is_finite() {
+                return Err(format!("verification.pressure = {p}: must be finite"));
             }
             Ok(Verification::LameSphere {
                 inner_radius: a,
@@ -877,9 +956,18 @@ fn build_verification(
             let g = v
                 .gradient
                 .ok_or("verification: uniform_strain needs gradient")?;
+            if g.iter().flatten().any(|v| !v.is_finite()) {
+                return Err("verification.gradient: entries must be finite".into());
+            }
             Ok(Verification::UniformStrain { gradient: g })
         }
         "contact_patch" => match (v.stress, v.pressure) {
+            _ if !interfaces.iter().any(|i| i.kind == InterfaceKind::Contact) => {
+                Err("verification: kind = \"contact_patch\" needs a contact interface".into())
+            }
+            (Some(stress), _) if stress.iter().flatten().any(|s| !s.is_finite()) => {
+                Err("verification.stress: entries must be finite".into())
+            }
             (Some(stress), Some(pressure)) if pressure > 0.0 && pressure.is_finite() => {
                 Ok(Verification::ContactPatch { stress, pressure })
             }
@@ -1236,6 +1324,12 @@ fn build_part(p: &MeshPart, i: usize, dir: &Path, err: &dyn Fn(String) -> Error)
             generate::hemisphere_quarter(kind, nc, nr, r, pole, zone, radial, &p.body)
         }
         "gmsh" => {
+            if p.body != crate::io::case_file::default_body() {
+                return Err(err(format!(
+                    "{key}.body does not apply to generator \"gmsh\" (its bodies are the file's \
+                     3D physical groups)"
+                )));
+            }
             let f = p
                 .file
                 .as_deref()

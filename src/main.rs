@@ -161,6 +161,18 @@ fn pull_our_options(args: &[String]) -> Result<Vec<String>, String> {
     Ok(head)
 }
 
+/// The words after the case or study file are PETSc options, each a `-name` with perhaps a
+/// value after it; a first word that is not an option (a second file, say) would be ignored by
+/// PETSc without a word.
+fn check_petsc_args(petsc: &[String]) -> Result<()> {
+    match petsc.first() {
+        Some(first) if !first.starts_with('-') => Err(Error::Other(format!(
+            "unexpected argument '{first}' after the file (PETSc options start with '-')"
+        ))),
+        _ => Ok(()),
+    }
+}
+
 fn execute(cli: Cli, program: String) -> Result<()> {
     match cli.command {
         Command::Check { case } => {
@@ -283,7 +295,7 @@ fn start<T>(
     let universe = mortar::petsc::start_mpi()?;
     let world = universe.world();
     let (rank, size) = (world.rank(), world.size());
-    let loaded = load();
+    let loaded = check_petsc_args(&petsc_options).and_then(|()| load());
     let first_failure = first_failing_rank(&world, loaded.is_err());
     let input = match loaded {
         Ok(s) if first_failure == size => s,

@@ -26,7 +26,8 @@
 //! number of Newton iterations on 1 and 2 ranks (its path depends on round-off), so the table
 //! also gives each run's Newton iterations (`SNESJacobianEval` events) and the speedup of the
 //! wall time per Newton iteration. Outputs in `DIR` (default `out/scaling`):
-//! `scaling.csv` (`phase,ranks,seconds,speedup`, the overall time as phase `total`) and
+//! `scaling.csv` (`phase,ranks,seconds,speedup`, the overall time as phase `total`; the
+//! speedup empty for a phase a run did not have) and
 //! `scaling.png`/`.svg` (time against ranks on log-log axes: the total, the ideal
 //! `total_1 / ranks`, and the phases of `PLOTTED`).
 
@@ -86,7 +87,12 @@ impl Scaling {
             .iter()
             .find(|(name, _)| *name == phase)
             .map_or(&[][..], |p| p.1);
-        stages.iter().filter_map(|s| self.runs[k].stage(s)).sum()
+        // (+ 0.0: an empty sum is -0.0.)
+        stages
+            .iter()
+            .filter_map(|s| self.runs[k].stage(s))
+            .sum::<f64>()
+            + 0.0
     }
 
     /// The overall speedup of run `k` over the first run (wall times).
@@ -151,7 +157,8 @@ impl Scaling {
         for (k, r) in self.runs.iter().enumerate() {
             for (phase, _) in PHASES {
                 let (first, mine) = (self.phase_seconds(0, phase), self.phase_seconds(k, phase));
-                let speedup = ratio(first, mine);
+                // (Empty when the run did not have the phase.)
+                let speedup = ratio(first, mine).map_or(String::new(), |s| s.to_string());
                 let _ = writeln!(out, "{phase},{},{mine},{speedup}", r.ranks);
             }
             let _ = writeln!(out, "total,{},{},{}", r.ranks, r.seconds, self.speedup(k));
@@ -216,19 +223,19 @@ fn table_row(out: &mut String, name: &str, seconds: Vec<f64>) {
         let _ = write!(out, "{s:>14.4}");
     }
     for s in &seconds[1..] {
-        let _ = write!(out, "{:>14.2}", ratio(seconds[0], *s));
+        match ratio(seconds[0], *s) {
+            Some(r) => write!(out, "{r:>14.2}"),
+            None => write!(out, "{:>14}", "-"),
+        }
+        .unwrap_or(());
     }
     out.push('\n');
 }
 
-/// A speedup: `before / after`, NaN when `after` is not positive (a phase the run did not
-/// have).
-fn ratio(before: f64, after: f64) -> f64 {
-    if after > 0.0 {
-        before / after
-    } else {
-        f64::NAN
-    }
+/// A speedup: `before / after`; `None` when `after` is not positive (a phase the run did
+/// not have).
+fn ratio(before: f64, after: f64) -> Option<f64> {
+    (after > 0.0).then(|| before / after)
 }
 
 #[cfg(test)]
@@ -274,5 +281,10 @@ mod tests {
         let total = table.lines().find(|l| l.starts_with("total")).unwrap();
         assert!(total.ends_with("2.00"), "{table}");
         assert!(table.lines().last().unwrap().ends_with("4.00"), "{table}");
+        // A phase neither run had (a scene without contact): 0 s, no speedup, no NaN.
+        assert!(csv.contains("mortar integration,2,0,\n"), "{csv}");
+        let row = table.lines().find(|l| l.starts_with("mortar")).unwrap();
+        assert!(row.ends_with(" -"), "{table}");
+        assert!(!csv.to_lowercase().contains("nan") && !table.contains("NaN"));
     }
 }

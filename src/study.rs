@@ -152,11 +152,14 @@
 //!   `default_on_front`, the share of its runs on the front; the closing line says it.
 //!   `study.csv`'s `on_front` column has the flags.
 //!
-//! A failed run (not converged, a bad PETSc option, ...) is recorded (`converged = false`, no
-//! point on the convergence plot) and the study goes on; when any failed, the study returns an
-//! error after writing everything, unless every failed run belongs to a variant with
-//! `may_fail = true` (a baseline expected to break). A metric missing from a converged run's summary stops the
-//! study: it would be missing from every run.
+//! A failed run (not converged, a bad value of a PETSc option the options database checks,
+//! ...) is recorded (`converged = false`, no point on the convergence plot) and the study goes
+//! on; when any failed, the study returns an error after writing everything, unless every
+//! failed run belongs to a variant with `may_fail = true` (a baseline expected to break). A
+//! metric missing from a converged run's summary stops the study: it would be missing from
+//! every run. So does an error that need not reach every rank alike (an error PETSc raises
+//! inside a solve, such as a factorization package it does not have; I/O): the message names
+//! the variant and level.
 
 use std::collections::BTreeSet;
 use std::fmt::Write as _;
@@ -731,7 +734,7 @@ impl Study {
             let warm_up = out.join("warm_up");
             if let (Some(Err(e)), _) = self.run_one(petsc, 0, 0, &warm_up)? {
                 if !e.is_collective() {
-                    return Err(e);
+                    return Err(self.run_error(0, 0, e));
                 }
             }
         }
@@ -809,7 +812,7 @@ impl Study {
                         }
                         record.message = Some(e.to_string());
                     }
-                    Some(Err(e)) => return Err(e),
+                    Some(Err(e)) => return Err(self.run_error(v, level, e)),
                 }
                 // After the broadcast, so that ranks that waited (`ranks`) stop with the others.
                 if share_record(petsc, &mut record, missing_metric.is_some()) {
@@ -1077,6 +1080,16 @@ impl Study {
         });
         let unused = options.unused().into_iter().collect();
         Ok((result, unused))
+    }
+
+    /// An error that ends the study (one that need not reach every rank alike: a PETSc
+    /// error, I/O), naming the run it came from.
+    fn run_error(&self, v: usize, level: usize, e: Error) -> Error {
+        Error::Other(format!(
+            "study {}: variant '{}' at level {level}: {e}",
+            self.file.display(),
+            self.variants[v].name
+        ))
     }
 
     /// Checks the `[curves]` columns against the `history.csv` in `run_dir` (rank 0), and

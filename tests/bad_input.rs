@@ -595,6 +595,77 @@ value = [0.0, 0.0, -1.0]
             valid_plus("[verification]\nkind = \"hertz\"\nradius = 1.0\ninterface = \"i\"\nmodel_fraction = 0.25\ninner_radius = 1.0\n"),
             "verification.inner_radius",
         ),
+        // --- Names that become file names, duplicates, bounds (found by a fuzzing sweep).
+        check(
+            "name_with_a_path",
+            valid_top(r#"name = "../../escaped""#),
+            "name",
+        ),
+        check("name_empty", valid_top(r#"name = """#), "name"),
+        check(
+            "interface_name_with_a_path",
+            valid_plus("[[interface]]\nname = \"a/b\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\n"),
+            "interface[0].name",
+        ),
+        check(
+            "interface_names_twice",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\n\n[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.ymax\"\nprimary = \"b.ymin\"\n"),
+            "interface[1].name",
+        ),
+        check(
+            "contact_penalty_overflowing",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\npenalty = 1e300\n"),
+            "interface[0].penalty",
+        ),
+        check(
+            "uzawa_max_absurd",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\nuzawa_max = 100000000\n"),
+            "interface[0].uzawa_max",
+        ),
+        check(
+            "max_cuts_below_round_off",
+            valid_plus("[steps]\ncount = 1\nmax_cuts = 1100\n"),
+            "steps.max_cuts",
+        ),
+        check(
+            "dirichlet_component_twice",
+            valid_with(
+                "components = [\"x\"]\nvalue = [0.01]",
+                "components = [\"x\", \"x\"]\nvalue = [0.01, 0.02]",
+            ),
+            "dirichlet[1].components",
+        ),
+        run(
+            "dirichlet_gradient_nan",
+            valid_plus("[[dirichlet]]\nset = \"b.zmax\"\ncomponents = [\"z\"]\ngradient = [[nan, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]\n"),
+            "dirichlet[2].gradient",
+        ),
+        check(
+            "young_subnormal",
+            valid_with("young = 1000.0", "young = 1e-320"),
+            "young",
+        ),
+        check(
+            "track_twice",
+            valid_plus("[output]\ntrack = [\"b.xmax\", \"b.xmax\"]\n"),
+            "output.track[1]",
+        ),
+        check(
+            "uniform_strain_gradient_nan",
+            valid_plus("[verification]\nkind = \"uniform_strain\"\ngradient = [[nan, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]\n"),
+            "verification.gradient",
+        ),
+        check(
+            "contact_patch_without_contact",
+            valid_plus("[verification]\nkind = \"contact_patch\"\nstress = [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, -1.0]]\npressure = 1.0\n"),
+            "contact interface",
+        ),
+        check(
+            "gmsh_part_with_a_body",
+            text("[[mesh]]\nbody = \"x\"\ngenerator = \"gmsh\"\nfile = \"m.msh\"\n"),
+            "mesh[0].body",
+        ),
+        run("second_file_after_the_case", text(VALID), "extra.toml").args(&["extra.toml"]),
         // --- PETSc options, on the command line and in a file.
         check(
             "missing_petsc_options_file",

@@ -293,6 +293,38 @@ set = { "mesh.0.element" = "hex8" }
     assert!(out.join("convergence.png").is_file() && out.join("convergence.svg").is_file());
 }
 
+/// An error PETSc raises inside a solve (a factorization package it does not have) ends the
+/// study, since it need not reach every rank alike; its one line names the variant and level.
+#[test]
+fn an_error_inside_a_solve_names_the_variant() {
+    let dir = study_dir(
+        "study_solver_package",
+        &small_study(
+            r#"
+[[variant]]
+name = "hex8"
+set = { "mesh.0.element" = "hex8" }
+
+[[variant]]
+name = "no_such_package"
+set = { "mesh.0.element" = "hex8" }
+petsc = "-pc_type lu -pc_factor_mat_solver_type nonexistent"
+"#,
+        ),
+    );
+    let o = run_study(&dir, &["-q"]);
+    let stderr = text(&o.stderr);
+    assert!(!o.status.success());
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert_eq!(lines.len(), 1, "{stderr}");
+    assert!(
+        lines[0].starts_with("mortar: error: ")
+            && lines[0].contains("variant 'no_such_package' at level 0")
+            && lines[0].contains("nonexistent"),
+        "{stderr}"
+    );
+}
+
 /// A fresh folder with `case.toml` = a one-element Neo-Hookean block (E = 100, nu = 0.3)
 /// compressed along z by 0.2 in 4 steps, free to expand sideways, and `study.toml` = `study`.
 /// The deformation is homogeneous, so the reaction is exactly proportional to E.

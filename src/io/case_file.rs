@@ -45,7 +45,8 @@ use crate::error::{Error, Result};
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CaseFile {
-    /// Scene name, written as `case` in summary.json. Default: the case folder's name.
+    /// Scene name, written as `case` in summary.json and naming the output files. Default: the
+    /// case folder's name. Not empty, no leading `.`, no `/`, `\\` or control characters.
     pub name: Option<String>,
     /// PETSc options file (relative to the case file), read before the command line so command
     /// line options win. Optional.
@@ -97,7 +98,8 @@ pub struct CaseFile {
 #[serde(deny_unknown_fields)]
 pub struct MeshPart {
     /// Body name for generated parts (their sets become `<body>.<set>`). Gmsh parts take their
-    /// bodies from 3D physical groups and their set names as written in the file.
+    /// bodies from 3D physical groups and their set names as written in the file (`body` is
+    /// refused there).
     #[serde(default = "default_body")]
     pub body: String,
     /// `"box"`, `"beam"`, `"thick_sphere_octant"`, `"hemisphere_quarter"` or `"gmsh"`.
@@ -160,7 +162,7 @@ pub struct MeshPart {
     pub distort: f64,
 }
 
-fn default_body() -> String {
+pub(crate) fn default_body() -> String {
     "body".to_string()
 }
 
@@ -172,7 +174,7 @@ pub struct MaterialSpec {
     pub body: Option<String>,
     /// `"linear_elastic"` (small strain) or `"neo_hookean"` (compressible, finite strain).
     pub model: String,
-    /// Young's modulus, > 0.
+    /// Young's modulus, in [1e-100, 1e100].
     pub young: f64,
     /// Poisson's ratio, in (-1, 0.5).
     pub poisson: f64,
@@ -195,12 +197,12 @@ pub struct LoadCurveSpec {
 pub struct DirichletSpec {
     /// Node set or face set name.
     pub set: String,
-    /// Components fixed: any of `"x"`, `"y"`, `"z"`.
+    /// Components fixed: any of `"x"`, `"y"`, `"z"`, each at most once.
     pub components: Vec<String>,
     /// Displacement at full load for each listed component (same order). Default: zeros.
     pub value: Option<Vec<f64>>,
     /// Instead of `value`: the displacement at full load is the linear field u = G X with this
-    /// gradient G (row-major 3x3), evaluated at each node (used by patch tests).
+    /// gradient G (row-major 3x3, finite), evaluated at each node (used by patch tests).
     pub gradient: Option<[[f64; 3]; 3]>,
     /// Load curve. Default: ramp.
     #[serde(default)]
@@ -281,7 +283,8 @@ pub struct BodyForceSpec {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct InterfaceSpec {
-    /// Name, used in output file names and metric names.
+    /// Name, used in output file names and metric names: unique among the interfaces, not
+    /// empty, no leading `.`, no `/`, `\\` or control characters.
     pub name: String,
     /// `"tied"`: the two sides move together (the vector weighted-gap constraint g_A = 0, on
     /// reference weights). `"contact"`: unilateral frictional contact (Kuhn-Tucker conditions on
@@ -308,7 +311,8 @@ pub struct InterfaceSpec {
     /// that a uniform mesh has one penalty (the penalty patch test); a contact node partly
     /// covered by the primary surface has its penalties divided by its coverage (below 5 %
     /// coverage its traction fades out: `contact::frictional`). Default 1000 for tied
-    /// interfaces (one pass then needs 1-3 Uzawa augmentations) and 100 for contact.
+    /// interfaces (one pass then needs 1-3 Uzawa augmentations) and 100 for contact. Must lie
+    /// in [1e-6, 1e12].
     pub penalty: Option<f64>,
     /// Uzawa augmentations stop when every violation is below this fraction of h_A. Tied: the
     /// gap |g_A| / a_A; default 1e-12 (the tied patch test holds to 1e-10). Contact: the
@@ -327,7 +331,7 @@ pub struct InterfaceSpec {
     /// passes: on dissimilar meshes the two passes' weak conditions cannot both hold exactly,
     /// so augmenting them drives a tied interface into locking and never meets a contact
     /// tolerance (measured on the sliding blocks: the cap of 10 hit in every step); two passes
-    /// are a penalty method. One pass: 50 tied, 10 contact.
+    /// are a penalty method. One pass: 50 tied, 10 contact. At most 1000.
     pub uzawa_max: Option<usize>,
     /// Degree of the triangle rule on each integration pallet. Default 8 for quadratic faces,
     /// 4 for linear ones. Up to degree 8 the rules are Dunavant's symmetric ones (6, 7, 12 and
@@ -369,6 +373,8 @@ pub struct StepsSpec {
     #[serde(default = "one")]
     pub count: usize,
     /// How many times a step may be halved after a failed solve before the run stops. Default 6.
+    /// The smallest step, `1 / count / 2^max_cuts` of the load, must be at least 1e-12 (below,
+    /// the load no longer advances in floating point).
     #[serde(default = "six")]
     pub max_cuts: usize,
     /// Start each step's Newton from the consistent predictor (the step's load and prescribed
@@ -473,7 +479,7 @@ pub struct OutputSpec {
     /// dofs). Default: every set named in `dirichlet` and `symmetry`.
     pub reactions: Option<Vec<String>>,
     /// Node or face sets whose mean displacement goes into the history as `track_<set>_x`,
-    /// `_y`, `_z` (a beam's tip, say). Default: none.
+    /// `_y`, `_z` (a beam's tip, say), each set at most once. Default: none.
     #[serde(default)]
     pub track: Vec<String>,
     /// A study file (path relative to the case file) that `mortar run` runs after the scene,
@@ -513,9 +519,10 @@ pub struct VerificationSpec {
     pub outer_radius: Option<f64>,
     /// lame_sphere: the inner pressure; contact_patch: the exact contact pressure p0.
     pub pressure: Option<f64>,
-    /// uniform_strain: the displacement gradient G (row-major 3x3).
+    /// uniform_strain: the displacement gradient G (row-major 3x3, finite).
     pub gradient: Option<[[f64; 3]; 3]>,
-    /// contact_patch: the exact Cauchy stress (row-major 3x3).
+    /// contact_patch: the exact Cauchy stress (row-major 3x3, finite); the scene needs a
+    /// contact interface.
     pub stress: Option<[[f64; 3]; 3]>,
     /// hertz: the radius R of the sphere pressed on the flat (for two spheres, the effective
     /// radius 1/R = 1/R1 + 1/R2), > 0. Required.

@@ -197,12 +197,13 @@ impl Reader {
                 .next()
                 .and_then(|s| s.trim().parse().ok())
                 .ok_or_else(bad)?;
-            let name = it
-                .next()
-                .ok_or_else(bad)?
-                .trim()
-                .trim_matches('"')
-                .to_string();
+            let quoted = it.next().ok_or_else(bad)?.trim();
+            // A name in double quotes (as gmsh writes it), or bare.
+            let name = match quoted.strip_prefix('"') {
+                Some(rest) => rest.strip_suffix('"').ok_or_else(bad)?,
+                None => quoted,
+            }
+            .to_string();
             names.insert((dim, tag), name);
         }
         match lines.next() {
@@ -674,6 +675,12 @@ mod tests {
             assert!(e.contains(name), "{e}");
             assert!(e.contains(what), "{name}: {e}");
         }
+        let two = std::fs::read_to_string(data("two_hex.msh")).unwrap();
+        let unterminated = two.replace("2 3 \"fixed\"", "2 3 \"fixed");
+        let e = read_msh_bytes(unterminated.as_bytes(), Path::new("quote.msh"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("quote.msh") && e.contains("fixed"), "{e}");
         let e = read_msh_bytes(b"", Path::new("empty.msh"))
             .unwrap_err()
             .to_string();

@@ -84,6 +84,9 @@ pub fn parse(text: &str) -> std::result::Result<PetscLog, String> {
         .find_map(|l| l.strip_prefix("Time (sec):"))
         .and_then(|rest| rest.split_whitespace().next()?.parse::<f64>().ok())
         .ok_or("no 'Time (sec):' line")?;
+    if !(seconds.is_finite() && seconds > 0.0) {
+        return Err(format!("'Time (sec):' is {seconds}, not a positive time"));
+    }
     let mut lines = text
         .lines()
         .skip_while(|l| !l.starts_with("Summary of Stages:"));
@@ -106,6 +109,7 @@ pub fn parse(text: &str) -> std::result::Result<PetscLog, String> {
             .split_whitespace()
             .next()
             .and_then(|t| t.parse::<f64>().ok())
+            .filter(|t| t.is_finite() && *t >= 0.0)
             .ok_or_else(|| format!("stage line '{}' has no time", line.trim()))?;
         stages.push((name.trim().to_string(), time));
     }
@@ -216,5 +220,11 @@ SNESJacobianEval       1              1         1000     0.
         assert!(parse(&no_table).unwrap_err().contains("Summary of Stages"));
         let no_time = LOG.replace("Time (sec):", "Tiempo:");
         assert!(parse(&no_time).unwrap_err().contains("Time (sec)"));
+        let nan_time = LOG.replace("Time (sec):           2.008e+01", "Time (sec): nan");
+        assert!(parse(&nan_time).unwrap_err().contains("Time (sec)"));
+        let nan_stage = LOG.replace("Mortar integration: 1.0816e+01", "Mortar integration: nan");
+        assert!(parse(&nan_stage)
+            .unwrap_err()
+            .contains("Mortar integration"));
     }
 }

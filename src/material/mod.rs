@@ -114,12 +114,18 @@ impl Material {
         }
     }
 
-    /// Checks E > 0 and -1 < nu < 0.5; the error message names the offending parameter and value.
+    /// Checks 1e-100 <= E <= 1e100 and -1 < nu < 0.5; the error message names the offending
+    /// parameter and value.
     pub fn validate(&self) -> Result<(), String> {
+        // Any unit system puts a solid's modulus well inside these bounds.
+        const MIN_YOUNG: f64 = 1e-100;
+        const MAX_YOUNG: f64 = 1e100;
         let (e, nu) = self.params();
-        if !(e.is_finite() && e > 0.0) {
+        if !(MIN_YOUNG..=MAX_YOUNG).contains(&e) {
             return Err(format!(
-                "young = {e} is invalid for {}: Young's modulus must be positive and finite",
+                "young = {e} is invalid for {}: Young's modulus must lie in \
+                 [{MIN_YOUNG:e}, {MAX_YOUNG:e}] (beyond, stresses and stiffnesses over- or \
+                 underflow)",
                 self.name()
             ));
         }
@@ -413,6 +419,8 @@ mod tests {
             (0.0, 0.3, "young"),
             (-1.0, 0.3, "young"),
             (f64::NAN, 0.3, "young"),
+            (1e-320, 0.3, "young"),
+            (1e308, 0.3, "young"),
             (1.0, 0.5, "poisson"),
             (1.0, 0.7, "poisson"),
             (1.0, -1.0, "poisson"),

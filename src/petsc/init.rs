@@ -170,7 +170,10 @@ impl Drop for Petsc {
         // Drop; print it rather than lose it.
         let code = unsafe { p::PetscFinalize() };
         if code != 0 {
-            eprintln!("warning: PetscFinalize returned error code {code}");
+            eprintln!(
+                "mortar: warning: PetscFinalize returned error code {code}: what PETSc writes at \
+                 the end of a run (a -log_view file, say) may be missing"
+            );
         }
         // `universe` drops after this, calling MPI_Finalize.
     }

@@ -226,6 +226,13 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         let mut unconverged = 0usize;
         while t < 1.0 - 1e-12 {
             let t_new = if t + dt > 1.0 - 1e-9 { 1.0 } else { t + dt };
+            if t_new <= t {
+                // (The case file's bound on steps.max_cuts keeps steps far above this.)
+                return Err(Error::Solve(format!(
+                    "the load step {dt:.3e} no longer advances the load {} in floating point",
+                    load_text(t)
+                )));
+            }
             x.copy_to(&mut x_prev)?;
             if !model.contact.is_empty() {
                 // The contact stencils of this step (pairs within a margin): a new matrix when
@@ -347,11 +354,12 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                         uzawa_capped += 1;
                         if rank == 0 {
                             eprintln!(
-                                "mortar: warning: step {} (load {t_new}): an interface is still \
+                                "mortar: warning: step {} (load {}): an interface is still \
                                  above its Uzawa tolerances after uzawa_max = {augmentations} \
                                  augmentations (tied relative gap {:.3e}; contact: \
                                  {violation:.3e} times the tolerance)",
                                 step + 1,
+                                load_text(t_new),
                                 model.tying.max_relative_gap(&s.u, &world)
                             );
                         }
@@ -384,8 +392,11 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
             let null_pivots = snes.null_pivots()?;
             if let Some(n) = null_pivots.filter(|&n| n > 0) {
                 return Err(Error::Solve(format!(
-                    "the tangent stiffness is singular ({n} null pivot(s) at load {t_new}): a \
-                     body can move rigidly; constrain it (dirichlet or symmetry sets)"
+                    "the tangent stiffness is singular ({n} null pivot(s) at load {}): a \
+                     body can move rigidly (constrain it: dirichlet or symmetry sets), or the \
+                     input degrades the tangent (too low a quadrature_degree, an extreme \
+                     penalty or load)",
+                    load_text(t_new)
                 )));
             }
             let mut accepted_unconverged = false;
@@ -420,8 +431,9 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                     ));
                     if giving_up {
                         summary.message = Some(format!(
-                            "step {} (load {t_new}) did not converge after {} cuts: {why}",
+                            "step {} (load {}) did not converge after {} cuts: {why}",
                             step + 1,
+                            load_text(t_new),
                             scene.max_cuts
                         ));
                         break;
@@ -837,4 +849,14 @@ fn residual_scale(
     } else {
         1.0
     })
+}
+
+/// A load factor for messages: as Rust prints it, or in scientific notation when it is tiny
+/// (a step cut many times), where the plain form would run to a hundred digits.
+fn load_text(t: f64) -> String {
+    if t != 0.0 && t.abs() < 1e-4 {
+        format!("{t:.6e}")
+    } else {
+        format!("{t}")
+    }
 }
