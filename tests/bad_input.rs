@@ -676,6 +676,8 @@ value = [0.0, 0.0, -1.0]
             .or("KSP")
             .args(&["-ksp_type", "nonsense"]),
         run("pc_type_nonsense", text(VALID), "nonsense").args(&["-pc_type", "nonsense"]),
+        run("snes_rtol_nan", text(VALID), "-snes_rtol").args(&["-snes_rtol", "nan"]),
+        run("snes_atol_negative", text(VALID), "-snes_atol").args(&["-snes_atol", "-1"]),
         run(
             "petscrc_bad_integer",
             valid_top(r#"petsc_options = "petscrc""#),

@@ -135,14 +135,24 @@ impl Snes {
         })?;
         let mut max_it: PetscInt = 0;
         let mut max_f: PetscInt = 0;
+        let (mut atol, mut rtol, mut stol) = (0.0, 0.0, 0.0);
         chk!(SNESGetTolerances(
             snes.raw,
-            std::ptr::null_mut(),
-            std::ptr::null_mut(),
-            std::ptr::null_mut(),
+            &mut atol,
+            &mut rtol,
+            &mut stol,
             &mut max_it,
             &mut max_f
         ))?;
+        // PETSc takes any number here; a NaN or negative tolerance would never stop Newton.
+        for (name, value) in [("atol", atol), ("rtol", rtol), ("stol", stol)] {
+            if !(value.is_finite() && value >= 0.0) {
+                return Err(Error::Options {
+                    source_name: options_source.to_string(),
+                    msg: format!("-snes_{name} {value}: must be finite and >= 0"),
+                });
+            }
+        }
         let mut snes = snes;
         snes.history = vec![0.0; max_it.max(1) as usize + 2];
         Ok(snes)
