@@ -22,6 +22,15 @@ const MAX_STEPS: usize = 1_000_000;
 /// steps no longer move the load in floating point.
 const MIN_STEP: f64 = 1e-12;
 
+/// Largest magnitude of a length, coordinate, prescribed displacement or load: beyond it the
+/// quantities the solver forms from them (squares, stiffness times displacement) overflow.
+const MAX_MAGNITUDE: f64 = 1e100;
+
+/// A finite value within [`MAX_MAGNITUDE`].
+fn within_bounds(v: f64) -> bool {
+    v.is_finite() && v.abs() <= MAX_MAGNITUDE
+}
+
 /// Most Uzawa augmentations per step (`interface.uzawa_max`).
 const MAX_UZAWA: usize = 1000;
 
@@ -412,13 +421,16 @@ impl Scene {
                     d.components[c]
                 )));
             }
-            if d.gradient
+            if !d
+                .gradient
                 .iter()
                 .flatten()
                 .flatten()
-                .any(|g| !g.is_finite())
+                .all(|&g| within_bounds(g))
             {
-                return Err(err(format!("{key}.gradient: entries must be finite")));
+                return Err(err(format!(
+                    "{key}.gradient: entries must be finite and within +-{MAX_MAGNITUDE:e}"
+                )));
             }
             if d.value.is_some() && d.gradient.is_some() {
                 return Err(err(format!("{key}: give value or gradient, not both")));
@@ -431,8 +443,10 @@ impl Scene {
                     comps.len()
                 )));
             }
-            if let Some(v) = values.iter().find(|v| !v.is_finite()) {
-                return Err(err(format!("{key}.value: {v} is not finite")));
+            if let Some(v) = values.iter().find(|&&v| !within_bounds(v)) {
+                return Err(err(format!(
+                    "{key}.value: {v} is not finite or beyond +-{MAX_MAGNITUDE:e}"
+                )));
             }
             let curve = add_curve(&d.curve, format!("{key}.curve"))?;
             let rotation = match &d.rotation {
@@ -441,15 +455,23 @@ impl Scene {
                     if d.gradient.is_some() {
                         return Err(err(format!("{key}: give rotation or gradient, not both")));
                     }
-                    let len = r.axis.iter().map(|a| a * a).sum::<f64>().sqrt();
+                    // (Scaled by the largest entry first, so that no square overflows.)
+                    let largest = r.axis.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+                    let len = largest
+                        * r.axis
+                            .iter()
+                            .map(|a| (a / largest).powi(2))
+                            .sum::<f64>()
+                            .sqrt();
                     if !(len > 0.0 && len.is_finite()) {
                         return Err(err(format!(
                             "{key}.rotation.axis: must be a nonzero vector"
                         )));
                     }
-                    if !r.angle.is_finite() || r.centre.iter().any(|c| !c.is_finite()) {
+                    if !(within_bounds(r.angle) && r.centre.iter().all(|&c| within_bounds(c))) {
                         return Err(err(format!(
-                            "{key}.rotation: angle and centre must be finite"
+                            "{key}.rotation: angle and centre must be finite and within \
+                             +-{MAX_MAGNITUDE:e}"
                         )));
                     }
                     let rcurve = add_curve(&r.curve, format!("{key}.rotation.curve"))?;
@@ -512,8 +534,10 @@ impl Scene {
                 .face_set(&p.set)
                 .map_err(|e| err(format!("{key}.set: {e}")))?
                 .to_vec();
-            if !p.value.is_finite() {
-                return Err(err(format!("{key}.value is not finite")));
+            if !within_bounds(p.value) {
+                return Err(err(format!(
+                    "{key}.value is not finite or beyond +-{MAX_MAGNITUDE:e}"
+                )));
             }
             let curve = add_curve(&p.curve, format!("{key}.curve"))?;
             pressures.push(PressureLoad {
@@ -532,8 +556,10 @@ impl Scene {
                     .ok_or_else(|| err(format!("{key}.body: no body '{name}'")))?],
                 None => (0..mesh.bodies.len()).collect(),
             };
-            if b.value.iter().any(|v| !v.is_finite()) {
-                return Err(err(format!("{key}.value is not finite")));
+            if !b.value.iter().all(|&v| within_bounds(v)) {
+                return Err(err(format!(
+                    "{key}.value is not finite or beyond +-{MAX_MAGNITUDE:e}"
+                )));
             }
             let curve = add_curve(&b.curve, format!("{key}.curve"))?;
             body_forces.push(BodyForce {
@@ -1158,10 +1184,12 @@ fn build_part(p: &MeshPart, i: usize, dir: &Path, err: &dyn Fn(String) -> Error)
         })
     };
     let positive = |v: f64, name: &str| {
-        if v > 0.0 && v.is_finite() {
+        if v > 0.0 && within_bounds(v) {
             Ok(v)
         } else {
-            Err(err(format!("{key}.{name} = {v}: must be > 0")))
+            Err(err(format!(
+                "{key}.{name} = {v}: must be > 0 and at most {MAX_MAGNITUDE:e}"
+            )))
         }
     };
     // The sphere generators' n_circ and n_rad: required, >= 1.
@@ -1204,8 +1232,10 @@ fn build_part(p: &MeshPart, i: usize, dir: &Path, err: &dyn Fn(String) -> Error)
     };
     for (name, v) in [("lo", p.lo), ("hi", p.hi), ("translate", p.translate)] {
         if let Some(v) = v {
-            if v.iter().any(|c| !c.is_finite()) {
-                return Err(err(format!("{key}.{name} = {v:?}: must be finite")));
+            if !v.iter().all(|&c| within_bounds(c)) {
+                return Err(err(format!(
+                    "{key}.{name} = {v:?}: must be finite and within +-{MAX_MAGNITUDE:e}"
+                )));
             }
         }
     }

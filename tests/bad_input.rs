@@ -666,6 +666,21 @@ value = [0.0, 0.0, -1.0]
             "mesh[0].body",
         ),
         run("second_file_after_the_case", text(VALID), "extra.toml").args(&["extra.toml"]),
+        check(
+            "dirichlet_value_overflowing",
+            valid_with("value = [0.01]", "value = [1e300]"),
+            "dirichlet[1].value",
+        ),
+        check(
+            "box_hi_overflowing",
+            valid_with("hi = [1.0, 1.0, 1.0]", "hi = [1e300, 1.0, 1.0]"),
+            "mesh[0].hi",
+        ),
+        check(
+            "rotation_centre_overflowing",
+            valid_plus("[[dirichlet]]\nset = \"b.zmin\"\ncomponents = [\"x\"]\nrotation = { axis = [1e200, 1e200, 0.0], angle = 1.0, centre = [1e300, 0.0, 0.0] }\n"),
+            "dirichlet[2].rotation",
+        ),
         // --- PETSc options, on the command line and in a file.
         check(
             "missing_petsc_options_file",

@@ -109,7 +109,7 @@ pub struct MeshPart {
     pub element: Option<String>,
     /// box, beam: elements along x, y, z.
     pub divisions: Option<[usize; 3]>,
-    /// box: lower corner.
+    /// box: lower corner (lengths and coordinates of every generator: within +-1e100).
     pub lo: Option<[f64; 3]>,
     /// box: upper corner.
     pub hi: Option<[f64; 3]>,
@@ -199,7 +199,8 @@ pub struct DirichletSpec {
     pub set: String,
     /// Components fixed: any of `"x"`, `"y"`, `"z"`, each at most once.
     pub components: Vec<String>,
-    /// Displacement at full load for each listed component (same order). Default: zeros.
+    /// Displacement at full load for each listed component (same order), within +-1e100.
+    /// Default: zeros.
     pub value: Option<Vec<f64>>,
     /// Instead of `value`: the displacement at full load is the linear field u = G X with this
     /// gradient G (row-major 3x3, finite), evaluated at each node (used by patch tests).
@@ -246,7 +247,7 @@ pub struct SymmetrySpec {
 pub struct PressureSpec {
     /// Face set name.
     pub set: String,
-    /// Pressure at full load.
+    /// Pressure at full load, within +-1e100.
     pub value: f64,
     /// true (default): a follower load on the current face (finite strain, with its tangent);
     /// false: a dead load on the reference face (what small-strain linear theory assumes).
@@ -263,7 +264,7 @@ pub struct PressureSpec {
 pub struct BodyForceSpec {
     /// Body name. Default: every body.
     pub body: Option<String>,
-    /// Force vector at full load.
+    /// Force vector at full load, each entry within +-1e100.
     pub value: [f64; 3],
     /// Load curve. Default: ramp.
     #[serde(default)]
