@@ -3,6 +3,7 @@
 //! Every check of user input happens here, before any solve, with an error that names the key
 //! (`material[1].poisson`), the set, the body or the element. `mortar check` runs exactly this.
 
+use crate::{within_bounds, MAX_MAGNITUDE};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -18,18 +19,10 @@ const MAX_NEWTON_ITS: usize = 10_000;
 /// Largest accepted `steps.count`.
 const MAX_STEPS: usize = 1_000_000;
 
-/// The smallest load step that cutting may reach (`1 / steps.count / 2^max_cuts`): smaller
-/// steps no longer move the load in floating point.
+/// The smallest load step that cutting may reach (`1 / steps.count / 2^max_cuts`): a margin far
+/// above the round-off of the load itself (1e-16), where steps would stop advancing it, and
+/// a run could never end.
 const MIN_STEP: f64 = 1e-12;
-
-/// Largest magnitude of a length, coordinate, prescribed displacement or load: beyond it the
-/// quantities the solver forms from them (squares, stiffness times displacement) overflow.
-const MAX_MAGNITUDE: f64 = 1e100;
-
-/// A finite value within [`MAX_MAGNITUDE`].
-fn within_bounds(v: f64) -> bool {
-    v.is_finite() && v.abs() <= MAX_MAGNITUDE
-}
 
 /// Most Uzawa augmentations per step (`interface.uzawa_max`).
 const MAX_UZAWA: usize = 1000;
@@ -470,8 +463,9 @@ impl Scene {
                     }
                     if !(within_bounds(r.angle) && r.centre.iter().all(|&c| within_bounds(c))) {
                         return Err(err(format!(
-                            "{key}.rotation: angle and centre must be finite and within \
-                             +-{MAX_MAGNITUDE:e}"
+                            "{key}.rotation: angle = {} and centre = {:?} must be finite and \
+                             within +-{MAX_MAGNITUDE:e}",
+                            r.angle, r.centre
                         )));
                     }
                     let rcurve = add_curve(&r.curve, format!("{key}.rotation.curve"))?;
@@ -495,6 +489,12 @@ impl Scene {
                         Some(g) => (0..3).map(|j| g[c][j] * mesh.coords[v][j]).sum(),
                         None => values[k],
                     };
+                    if !within_bounds(value) {
+                        return Err(err(format!(
+                            "{key}.gradient: gives node {v} the displacement {value:e}, beyond \
+                             +-{MAX_MAGNITUDE:e}"
+                        )));
+                    }
                     by_dof.insert(
                         3 * v + c,
                         Constraint {
@@ -611,7 +611,7 @@ impl Scene {
         if smallest_step < MIN_STEP {
             return Err(err(format!(
                 "steps.max_cuts = {}: with steps.count = {} the smallest step would be {smallest_step:.3e} \
-                 of the load, below {MIN_STEP:e}, where the load no longer advances in floating point",
+                 of the load, below {MIN_STEP:e} (steps near round-off would never finish the run)",
                 file.steps.max_cuts, file.steps.count
             )));
         }
@@ -813,11 +813,16 @@ fn build_interface(
             "{key}.friction = {friction}: must be finite and >= 0"
         ));
     }
-    let tangential_penalty = positive(
-        "tangential_penalty",
-        spec.tangential_penalty
-            .unwrap_or(DEFAULT_TANGENTIAL_PENALTY),
-    )?;
+    let tangential_penalty = spec
+        .tangential_penalty
+        .unwrap_or(DEFAULT_TANGENTIAL_PENALTY);
+    if !(PENALTY_RANGE.0..=PENALTY_RANGE.1).contains(&tangential_penalty) {
+        return Err(format!(
+            "{key}.tangential_penalty = {tangential_penalty}: must lie in [{:e}, {:e}] (a \
+             factor of E/h)",
+            PENALTY_RANGE.0, PENALTY_RANGE.1
+        ));
+    }
     let uzawa_slip_tol = positive(
         "uzawa_slip_tol",
         spec.uzawa_slip_tol.unwrap_or(DEFAULT_UZAWA_SLIP_TOL),
@@ -829,9 +834,11 @@ fn build_interface(
         ));
     }
     let penalty_growth_cap = spec.penalty_growth_cap.unwrap_or(100.0);
-    if !(penalty_growth_cap >= 1.0 && penalty_growth_cap.is_finite()) {
+    if !(penalty_growth_cap >= 1.0 && penalty * penalty_growth_cap <= PENALTY_RANGE.1) {
         return Err(format!(
-            "{key}.penalty_growth_cap = {penalty_growth_cap}: must be finite and >= 1"
+            "{key}.penalty_growth_cap = {penalty_growth_cap}: must be >= 1, and penalty times \
+             it at most {:e}",
+            PENALTY_RANGE.1
         ));
     }
     let uzawa_max = spec.uzawa_max.unwrap_or(match (kind, spec.passes) {
@@ -966,11 +973,13 @@ fn build_verification(
                     )
                 }
             };
-            if !(a > 0.0 && b > a && b.is_finite()) {
+            if !(a > 0.0 && b > a && within_bounds(b)) {
                 return Err(format!("verification: radii must be finite with 0 < inner_radius < outer_radius (got {a}, {b})"));
             }
-            if !p.is_finite() {
-                return Err(format!("verification.pressure = {p}: must be finite"));
+            if !within_bounds(p) {
+                return Err(format!(
+                    "verification.pressure = {p}: must be finite and within +-{MAX_MAGNITUDE:e}"
+                ));
             }
             Ok(Verification::LameSphere {
                 inner_radius: a,
@@ -982,8 +991,10 @@ fn build_verification(
             let g = v
                 .gradient
                 .ok_or("verification: uniform_strain needs gradient")?;
-            if g.iter().flatten().any(|v| !v.is_finite()) {
-                return Err("verification.gradient: entries must be finite".into());
+            if !g.iter().flatten().all(|&v| within_bounds(v)) {
+                return Err(format!(
+                    "verification.gradient: entries must be finite and within +-{MAX_MAGNITUDE:e}"
+                ));
             }
             Ok(Verification::UniformStrain { gradient: g })
         }
@@ -991,10 +1002,10 @@ fn build_verification(
             _ if !interfaces.iter().any(|i| i.kind == InterfaceKind::Contact) => {
                 Err("verification: kind = \"contact_patch\" needs a contact interface".into())
             }
-            (Some(stress), _) if stress.iter().flatten().any(|s| !s.is_finite()) => {
-                Err("verification.stress: entries must be finite".into())
-            }
-            (Some(stress), Some(pressure)) if pressure > 0.0 && pressure.is_finite() => {
+            (Some(stress), _) if !stress.iter().flatten().all(|&s| within_bounds(s)) => Err(
+                format!("verification.stress: entries must be finite and within +-{MAX_MAGNITUDE:e}"),
+            ),
+            (Some(stress), Some(pressure)) if pressure > 0.0 && within_bounds(pressure) => {
                 Ok(Verification::ContactPatch { stress, pressure })
             }
             _ => Err("verification: contact_patch needs stress and pressure > 0".into()),
@@ -1259,6 +1270,7 @@ fn build_part(p: &MeshPart, i: usize, dir: &Path, err: &dyn Fn(String) -> Error)
     if p.generator != "gmsh" && p.file.is_some() {
         return Err(err(format!("{key}.file is only for generator \"gmsh\"")));
     }
+    let body = p.body.clone().unwrap_or_else(|| "body".into());
     let mut mesh = match p.generator.as_str() {
         "box" => {
             let (lo, hi) = (
@@ -1295,7 +1307,7 @@ fn build_part(p: &MeshPart, i: usize, dir: &Path, err: &dyn Fn(String) -> Error)
                     )));
                 }
             }
-            generate::zoned_box_mesh(element()?, divisions()?, lo, hi, grading, zone, &p.body)
+            generate::zoned_box_mesh(element()?, divisions()?, lo, hi, grading, zone, &body)
         }
         "beam" => generate::beam(
             element()?,
@@ -1303,7 +1315,7 @@ fn build_part(p: &MeshPart, i: usize, dir: &Path, err: &dyn Fn(String) -> Error)
             positive(need(p.length, "length")?, "length")?,
             positive(need(p.width, "width")?, "width")?,
             positive(need(p.height, "height")?, "height")?,
-            &p.body,
+            &body,
         ),
         "thick_sphere_octant" => {
             let a = positive(need(p.inner_radius, "inner_radius")?, "inner_radius")?;
@@ -1314,7 +1326,7 @@ fn build_part(p: &MeshPart, i: usize, dir: &Path, err: &dyn Fn(String) -> Error)
                 )));
             }
             let (nc, nr) = sphere_cells()?;
-            generate::thick_sphere_octant(element()?, nc, nr, a, b, &p.body)
+            generate::thick_sphere_octant(element()?, nc, nr, a, b, &body)
         }
         "hemisphere_quarter" => {
             let r = positive(need(p.radius, "radius")?, "radius")?;
@@ -1351,15 +1363,9 @@ fn build_part(p: &MeshPart, i: usize, dir: &Path, err: &dyn Fn(String) -> Error)
                     "{key}.pole_zone = {zone}: has no effect without pole_grading > 1"
                 )));
             }
-            generate::hemisphere_quarter(kind, nc, nr, r, pole, zone, radial, &p.body)
+            generate::hemisphere_quarter(kind, nc, nr, r, pole, zone, radial, &body)
         }
         "gmsh" => {
-            if p.body != crate::io::case_file::default_body() {
-                return Err(err(format!(
-                    "{key}.body does not apply to generator \"gmsh\" (its bodies are the file's \
-                     3D physical groups)"
-                )));
-            }
             let f = p
                 .file
                 .as_deref()
@@ -1372,7 +1378,7 @@ fn build_part(p: &MeshPart, i: usize, dir: &Path, err: &dyn Fn(String) -> Error)
             )))
         }
     };
-    prefix_sets(&mut mesh, &p.body);
+    prefix_sets(&mut mesh, &body);
     if p.distort != 0.0 {
         if !(0.0..0.3).contains(&p.distort) {
             return Err(err(format!(
@@ -1387,7 +1393,7 @@ fn build_part(p: &MeshPart, i: usize, dir: &Path, err: &dyn Fn(String) -> Error)
 
 /// Rejects keys that the part's generator does not use (they would be silently ignored).
 fn check_keys_apply(p: &MeshPart, key: &str) -> std::result::Result<(), String> {
-    let given: [(&str, bool); 19] = [
+    let given: [(&str, bool); 20] = [
         ("element", p.element.is_some()),
         ("divisions", p.divisions.is_some()),
         ("lo", p.lo.is_some()),
@@ -1406,10 +1412,12 @@ fn check_keys_apply(p: &MeshPart, key: &str) -> std::result::Result<(), String> 
         ("inner_radius", p.inner_radius.is_some()),
         ("outer_radius", p.outer_radius.is_some()),
         ("file", p.file.is_some()),
+        ("body", p.body.is_some()),
         ("distort", p.distort != 0.0),
     ];
     let allowed: &[&str] = match p.generator.as_str() {
         "box" => &[
+            "body",
             "element",
             "divisions",
             "lo",
@@ -1419,6 +1427,7 @@ fn check_keys_apply(p: &MeshPart, key: &str) -> std::result::Result<(), String> 
             "distort",
         ],
         "beam" => &[
+            "body",
             "element",
             "divisions",
             "length",
@@ -1427,6 +1436,7 @@ fn check_keys_apply(p: &MeshPart, key: &str) -> std::result::Result<(), String> 
             "distort",
         ],
         "thick_sphere_octant" => &[
+            "body",
             "element",
             "n_circ",
             "n_rad",
@@ -1435,6 +1445,7 @@ fn check_keys_apply(p: &MeshPart, key: &str) -> std::result::Result<(), String> 
             "distort",
         ],
         "hemisphere_quarter" => &[
+            "body",
             "element",
             "n_circ",
             "n_rad",

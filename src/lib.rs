@@ -29,3 +29,13 @@ pub mod study;
 pub mod verify;
 
 pub use error::{Error, Result};
+
+/// Largest magnitude accepted for an input quantity (a coordinate, length, modulus, prescribed
+/// displacement or load): beyond it the quantities formed from them (squares, stiffness times
+/// displacement) overflow. Checked where the input is read.
+pub const MAX_MAGNITUDE: f64 = 1e100;
+
+/// A finite value within [`MAX_MAGNITUDE`].
+pub fn within_bounds(v: f64) -> bool {
+    v.is_finite() && v.abs() <= MAX_MAGNITUDE
+}

@@ -161,16 +161,13 @@ fn pull_our_options(args: &[String]) -> Result<Vec<String>, String> {
     Ok(head)
 }
 
-/// The words after the case or study file are PETSc options, each a `-name` with perhaps a
-/// value after it; a first word that is not an option (a second file, say) would be ignored by
-/// PETSc without a word.
+/// The words after the case or study file are PETSc options, each a `-name` with perhaps one
+/// value after it (`petsc::options::parse_words`); a stray word (a second file, say) would be
+/// ignored by PETSc without a word.
 fn check_petsc_args(petsc: &[String]) -> Result<()> {
-    match petsc.first() {
-        Some(first) if !first.starts_with('-') => Err(Error::Other(format!(
-            "unexpected argument '{first}' after the file (PETSc options start with '-')"
-        ))),
-        _ => Ok(()),
-    }
+    mortar::petsc::options::parse_words(petsc.iter().map(String::as_str))
+        .map(|_| ())
+        .map_err(|e| Error::Other(format!("command line after the file: {e}")))
 }
 
 fn execute(cli: Cli, program: String) -> Result<()> {

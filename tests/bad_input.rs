@@ -517,8 +517,8 @@ value = [0.0, 0.0, -1.0]
         ),
         check(
             "contact_patch_without_pressure",
-            valid_plus("[verification]\nkind = \"contact_patch\"\nstress = [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, -1.0]]\n"),
-            "contact_patch",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\n\n[verification]\nkind = \"contact_patch\"\nstress = [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, -1.0]]\n"),
+            "pressure",
         ),
         check(
             "rotation_with_zero_axis",
@@ -666,6 +666,23 @@ value = [0.0, 0.0, -1.0]
             "mesh[0].body",
         ),
         run("second_file_after_the_case", text(VALID), "extra.toml").args(&["extra.toml"]),
+        run("stray_word_after_an_option_value", text(VALID), "extra.toml")
+            .args(&["-ksp_type", "preonly", "extra.toml"]),
+        check(
+            "tangential_penalty_overflowing",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\ntangential_penalty = 1e300\n"),
+            "interface[0].tangential_penalty",
+        ),
+        check(
+            "penalty_growth_cap_overflowing",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\npenalty_growth_cap = 1e300\n"),
+            "interface[0].penalty_growth_cap",
+        ),
+        check(
+            "gradient_displacement_overflowing",
+            valid_plus("[[dirichlet]]\nset = \"b.zmax\"\ncomponents = [\"z\"]\ngradient = [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1e100]]\n").map(|c| c.replace("hi = [1.0, 1.0, 1.0]", "hi = [1.0, 1.0, 1e100]")),
+            "dirichlet[2].gradient",
+        ),
         check(
             "dirichlet_value_overflowing",
             valid_with("value = [0.01]", "value = [1e300]"),
@@ -679,7 +696,7 @@ value = [0.0, 0.0, -1.0]
         check(
             "rotation_centre_overflowing",
             valid_plus("[[dirichlet]]\nset = \"b.zmin\"\ncomponents = [\"x\"]\nrotation = { axis = [1e200, 1e200, 0.0], angle = 1.0, centre = [1e300, 0.0, 0.0] }\n"),
-            "dirichlet[2].rotation",
+            "centre",
         ),
         // --- PETSc options, on the command line and in a file.
         check(

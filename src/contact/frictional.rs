@@ -2119,7 +2119,11 @@ mod tests {
     /// 0.5 68 %, the others wholly; along y, the row at 0 is 0.04 % covered (below
     /// [`MIN_COVERAGE`]), the row at 0.25 52 %, the others wholly.
     fn partly_covered_blocks() -> Scene {
-        let case = r#"
+        scene_of(PARTLY_COVERED)
+    }
+
+    /// The case text of [`partly_covered_blocks`].
+    const PARTLY_COVERED: &str = r#"
 name = "partly_covered"
 [[mesh]]
 body = "low"
@@ -2160,7 +2164,14 @@ primary = "up.zmin"
 scheme = 2
 friction = 0.3
 "#;
-        let dir = std::env::temp_dir().join(format!("mortar-covered-{}", std::process::id()));
+
+    /// The scene of a case text.
+    fn scene_of(case: &str) -> Scene {
+        // One folder per call: the tests run in parallel threads.
+        static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let dir =
+            std::env::temp_dir().join(format!("mortar-covered-{}-{call}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("case.toml");
         std::fs::write(&path, case).unwrap();
@@ -2334,25 +2345,43 @@ friction = 0.3
     /// state adds nothing.
     #[test]
     fn contact_pattern_couples_every_dof_of_a_stencil() {
-        let scene = partly_covered_blocks();
+        // As shipped, then with constrained dofs on both contact faces (their columns and rows
+        // left out), then node-on-segment.
+        let constrained = PARTLY_COVERED.replace(
+            "[[dirichlet]]",
+            "[[symmetry]]\nset = \"low.xmin\"\nnormal = \"x\"\n[[symmetry]]\nset = \"up.ymin\"\nnormal = \"y\"\n[[dirichlet]]",
+        );
+        let node_on_segment = PARTLY_COVERED.replace("scheme = 2", "method = \"node_on_segment\"");
+        assert_eq!(check_contact_pattern(&scene_of(PARTLY_COVERED)), 0);
+        assert!(check_contact_pattern(&scene_of(&constrained)) > 0);
+        check_contact_pattern(&scene_of(&node_on_segment));
+    }
+
+    /// [`contact_pattern_couples_every_dof_of_a_stencil`] for one scene; returns how many
+    /// constrained dofs the stencils held.
+    fn check_contact_pattern(scene: &Scene) -> usize {
         let u = vec![0.0; 3 * scene.mesh.num_nodes()];
-        let x = super::current_positions(&scene, &u);
+        let x = super::current_positions(scene, &u);
+        let mut constrained = 0;
         let half = scene.mesh.num_elements() / 2;
         for rank in 0..2 {
             let elements = (0..scene.mesh.num_elements())
                 .map(|e| usize::from(e >= half))
                 .collect();
             let dofs = DofMap::new(&scene.mesh, elements, rank, 2, &scene.constrained_mask());
-            let contact = ContactInterfaces::new(&scene, &dofs).unwrap();
+            let contact = ContactInterfaces::new(scene, &dofs).unwrap();
             let owned = dofs.owned_start..dofs.owned_start + dofs.owned_count;
             let mut expected = dofs.bulk_sparsity(&scene.mesh);
             let mut added = 0;
             for pass in contact.interfaces.iter().flat_map(|i| &i.passes) {
-                for nodes in pass.mortar_stencils(&x) {
-                    let cols: Vec<_> = super::global_dofs(&dofs, &nodes)
-                        .into_iter()
-                        .filter(|&g| g >= 0)
-                        .collect();
+                let stencils = match pass.method {
+                    super::ContactMethod::Mortar => pass.mortar_stencils(&x),
+                    super::ContactMethod::NodeOnSegment => pass.nts_stencils(&x),
+                };
+                for nodes in stencils {
+                    let all = super::global_dofs(&dofs, &nodes);
+                    constrained += all.iter().filter(|&&g| g < 0).count();
+                    let cols: Vec<_> = all.into_iter().filter(|&g| g >= 0).collect();
                     for &g in cols.iter().filter(|&&g| owned.contains(&(g as usize))) {
                         expected.rows[g as usize - dofs.owned_start].extend(&cols);
                         added += 1;
@@ -2365,10 +2394,11 @@ friction = 0.3
                 row.dedup();
             }
             let mut sparsity = dofs.bulk_sparsity(&scene.mesh);
-            assert!(contact.add_sparsity(&scene, &dofs, &u, &mut sparsity));
+            assert!(contact.add_sparsity(scene, &dofs, &u, &mut sparsity));
             assert_eq!(sparsity.rows, expected.rows, "rank {rank}");
-            assert!(!contact.add_sparsity(&scene, &dofs, &u, &mut sparsity));
+            assert!(!contact.add_sparsity(scene, &dofs, &u, &mut sparsity));
         }
+        constrained
     }
 
     #[test]

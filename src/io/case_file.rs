@@ -46,7 +46,7 @@ use crate::error::{Error, Result};
 #[serde(deny_unknown_fields)]
 pub struct CaseFile {
     /// Scene name, written as `case` in summary.json and naming the output files. Default: the
-    /// case folder's name. Not empty, no leading `.`, no `/`, `\\` or control characters.
+    /// case folder's name. Not empty, no leading `.`, no `/`, `\` or control characters.
     pub name: Option<String>,
     /// PETSc options file (relative to the case file), read before the command line so command
     /// line options win. Optional.
@@ -97,11 +97,10 @@ pub struct CaseFile {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MeshPart {
-    /// Body name for generated parts (their sets become `<body>.<set>`). Gmsh parts take their
-    /// bodies from 3D physical groups and their set names as written in the file (`body` is
-    /// refused there).
-    #[serde(default = "default_body")]
-    pub body: String,
+    /// Body name for generated parts (their sets become `<body>.<set>`). Default: `"body"`.
+    /// Gmsh parts take their bodies from 3D physical groups and their set names as written in
+    /// the file (`body` is refused there).
+    pub body: Option<String>,
     /// `"box"`, `"beam"`, `"thick_sphere_octant"`, `"hemisphere_quarter"` or `"gmsh"`.
     pub generator: String,
     /// Element type of generated parts: `hex8`, `hex20`, `hex27`, `tet4`, `tet10`
@@ -109,7 +108,7 @@ pub struct MeshPart {
     pub element: Option<String>,
     /// box, beam: elements along x, y, z.
     pub divisions: Option<[usize; 3]>,
-    /// box: lower corner (lengths and coordinates of every generator: within +-1e100).
+    /// box: lower corner, within +-1e100 (as every coordinate and length of a part).
     pub lo: Option<[f64; 3]>,
     /// box: upper corner.
     pub hi: Option<[f64; 3]>,
@@ -122,7 +121,7 @@ pub struct MeshPart {
     /// end over the zone's. Each in `[0, hi - lo)`, and non-zero only on a graded axis.
     /// Default `[0, 0, 0]` (no zone).
     pub grading_zone: Option<[f64; 3]>,
-    /// beam: length (x), width (y), height (z).
+    /// beam: length (x), width (y), height (z), each > 0 and at most 1e100.
     pub length: Option<f64>,
     pub width: Option<f64>,
     pub height: Option<f64>,
@@ -132,7 +131,7 @@ pub struct MeshPart {
     /// thick_sphere_octant: elements through the thickness; hemisphere_quarter: through the
     /// shell between the core cube and the sphere.
     pub n_rad: Option<usize>,
-    /// thick_sphere_octant: radii.
+    /// thick_sphere_octant: radii, > 0 and at most 1e100.
     pub inner_radius: Option<f64>,
     pub outer_radius: Option<f64>,
     /// hemisphere_quarter: the radius R. The part is the quarter `x, y >= 0` of the solid
@@ -154,16 +153,13 @@ pub struct MeshPart {
     pub radial_grading: Option<f64>,
     /// gmsh: the .msh file (format 4.1, ASCII or binary).
     pub file: Option<String>,
-    /// Moves every node of the part by this vector after generation. Default: none.
+    /// Moves every node of the part by this vector after generation, within +-1e100. Default:
+    /// none.
     pub translate: Option<[f64; 3]>,
     /// Perturbs interior nodes of a generated part by up to this fraction of the local element
     /// size (deterministic pseudo-random), to test distorted meshes. Default 0.
     #[serde(default)]
     pub distort: f64,
-}
-
-pub(crate) fn default_body() -> String {
-    "body".to_string()
 }
 
 /// A material for one body.
@@ -203,7 +199,8 @@ pub struct DirichletSpec {
     /// Default: zeros.
     pub value: Option<Vec<f64>>,
     /// Instead of `value`: the displacement at full load is the linear field u = G X with this
-    /// gradient G (row-major 3x3, finite), evaluated at each node (used by patch tests).
+    /// gradient G (row-major 3x3, entries and the displacements they give within +-1e100),
+    /// evaluated at each node (used by patch tests).
     pub gradient: Option<[[f64; 3]; 3]>,
     /// Load curve. Default: ramp.
     #[serde(default)]
@@ -221,9 +218,9 @@ pub struct DirichletSpec {
 pub struct RotationSpec {
     /// Rotation axis (any nonzero length).
     pub axis: [f64; 3],
-    /// Angle at full load, radians (right-hand rule about `axis`).
+    /// Angle at full load, radians (right-hand rule about `axis`), within +-1e100.
     pub angle: f64,
-    /// A point on the axis. Default: the origin.
+    /// A point on the axis, within +-1e100. Default: the origin.
     #[serde(default)]
     pub centre: [f64; 3],
     /// How the angle follows the load. Default: ramp.
@@ -285,7 +282,7 @@ pub struct BodyForceSpec {
 #[serde(deny_unknown_fields)]
 pub struct InterfaceSpec {
     /// Name, used in output file names and metric names: unique among the interfaces, not
-    /// empty, no leading `.`, no `/`, `\\` or control characters.
+    /// empty, no leading `.`, no `/`, `\` or control characters.
     pub name: String,
     /// `"tied"`: the two sides move together (the vector weighted-gap constraint g_A = 0, on
     /// reference weights). `"contact"`: unilateral frictional contact (Kuhn-Tucker conditions on
@@ -353,12 +350,13 @@ pub struct InterfaceSpec {
     /// node and cycle between slip in opposite directions (measured on the sliding blocks:
     /// alpha_T = 1 converges in at most 6 iterations per step, alpha_T = 3 and 10 fail at every
     /// cut of the first step); the slip that a sticking node keeps under penalty is removed by
-    /// the Uzawa updates of one-pass interfaces.
+    /// the Uzawa updates of one-pass interfaces. Must lie in [1e-6, 1e12].
     pub tangential_penalty: Option<f64>,
     /// Contact: after an augmentation whose worst violation is above a quarter of the previous
     /// one, both penalties are multiplied by this factor (>= 1). Default 1: no growth.
     pub penalty_growth: Option<f64>,
-    /// Contact: the penalties grow at most to this multiple of their initial values. Default 100.
+    /// Contact: the penalties grow at most to this multiple of their initial values (>= 1, and
+    /// `penalty` times it at most 1e12). Default 100.
     pub penalty_growth_cap: Option<f64>,
 }
 

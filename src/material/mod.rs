@@ -118,8 +118,8 @@ impl Material {
     /// parameter and value.
     pub fn validate(&self) -> Result<(), String> {
         // Any unit system puts a solid's modulus well inside these bounds.
-        const MIN_YOUNG: f64 = 1e-100;
-        const MAX_YOUNG: f64 = 1e100;
+        const MIN_YOUNG: f64 = 1.0 / crate::MAX_MAGNITUDE;
+        const MAX_YOUNG: f64 = crate::MAX_MAGNITUDE;
         let (e, nu) = self.params();
         if !(MIN_YOUNG..=MAX_YOUNG).contains(&e) {
             return Err(format!(

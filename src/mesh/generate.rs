@@ -958,9 +958,10 @@ impl Mesh {
             )));
         }
         for (i, x) in self.coords.iter().enumerate() {
-            if !x.iter().all(|v| v.is_finite()) {
+            if !x.iter().all(|&v| crate::within_bounds(v)) {
                 return Err(Error::Mesh(format!(
-                    "node {i} has non-finite coordinates {x:?}"
+                    "node {i} has coordinates {x:?}: not finite or beyond +-{:e}",
+                    crate::MAX_MAGNITUDE
                 )));
             }
         }

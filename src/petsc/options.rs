@@ -195,11 +195,18 @@ fn set_value(name: &CString, value: Option<&CString>) -> Result<()> {
 /// values, as PETSc reads its command line: a word starting with `-` and a letter is a name,
 /// any other word is the value of the name before it. An error names the first stray value.
 pub fn parse(text: &str) -> std::result::Result<Vec<(String, Option<String>)>, String> {
-    let mut out: Vec<(String, Option<String>)> = Vec::new();
     if text.contains('\0') {
         return Err("contains a NUL character".into());
     }
-    for word in text.split_whitespace() {
+    parse_words(text.split_whitespace())
+}
+
+/// [`parse`] of words already split (a command line's arguments).
+pub fn parse_words<'a>(
+    words: impl IntoIterator<Item = &'a str>,
+) -> std::result::Result<Vec<(String, Option<String>)>, String> {
+    let mut out: Vec<(String, Option<String>)> = Vec::new();
+    for word in words {
         let is_name = word.starts_with('-')
             && word[1..]
                 .chars()

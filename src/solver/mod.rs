@@ -230,7 +230,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                 // (The case file's bound on steps.max_cuts keeps steps far above this.)
                 return Err(Error::Solve(format!(
                     "the load step {dt:.3e} no longer advances the load {} in floating point",
-                    load_text(t)
+                    Load(t)
                 )));
             }
             x.copy_to(&mut x_prev)?;
@@ -359,7 +359,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                                  augmentations (tied relative gap {:.3e}; contact: \
                                  {violation:.3e} times the tolerance)",
                                 step + 1,
-                                load_text(t_new),
+                                Load(t_new),
                                 model.tying.max_relative_gap(&s.u, &world)
                             );
                         }
@@ -396,7 +396,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                      body can move rigidly (constrain it: dirichlet or symmetry sets), or the \
                      input degrades the tangent (too low a quadrature_degree, an extreme \
                      penalty or load)",
-                    load_text(t_new)
+                    Load(t_new)
                 )));
             }
             let mut accepted_unconverged = false;
@@ -419,8 +419,9 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                     x_prev.copy_to(&mut x)?;
                     model.tying.set_multipliers(&multipliers);
                     model.contact.restore(&contact_saved);
+                    let load_new = Load(t_new);
                     say(format!(
-                        "  step {} load {t_new:.6}: not converged ({why}) after {} Newton its; {}",
+                        "  step {} load {load_new:.6}: not converged ({why}) after {} Newton its; {}",
                         step + 1,
                         outcome.iterations,
                         if giving_up {
@@ -433,7 +434,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                         summary.message = Some(format!(
                             "step {} (load {}) did not converge after {} cuts: {why}",
                             step + 1,
-                            load_text(t_new),
+                            Load(t_new),
                             scene.max_cuts
                         ));
                         break;
@@ -491,16 +492,17 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
             });
             drop(output_guard);
             phases.add("output", t_out.elapsed().as_secs_f64());
+            let load = Load(t);
             if accepted_unconverged {
                 unconverged += 1;
                 say(format!(
-                    "  step {step} load {t:.6}: NOT converged ({}) after {newton_total} Newton \
+                    "  step {step} load {load:.6}: NOT converged ({}) after {newton_total} Newton \
                      its, |F| {final_res:.3e}; accepted (steps.on_failure = \"continue\")",
                     outcome.reason
                 ));
             }
             say(format!(
-                "  step {step} load {t:.6}: {newton_total} Newton its{}, |F| {final_res:.3e}, {} linear its{}, {:.2} s",
+                "  step {step} load {load:.6}: {newton_total} Newton its{}, |F| {final_res:.3e}, {} linear its{}, {:.2} s",
                 if augmentations > 0 { format!(" ({augmentations} Uzawa augmentations)") } else { String::new() },
                 linear_total,
                 retries_note(cuts_in_row, fallbacks - fallbacks_before, fallback_line_search),
@@ -851,12 +853,18 @@ fn residual_scale(
     })
 }
 
-/// A load factor for messages: as Rust prints it, or in scientific notation when it is tiny
-/// (a step cut many times), where the plain form would run to a hundred digits.
-fn load_text(t: f64) -> String {
-    if t != 0.0 && t.abs() < 1e-4 {
-        format!("{t:.6e}")
-    } else {
-        format!("{t}")
+/// A load factor in messages and progress lines: as asked (`{}` or `{:.6}`), or in scientific
+/// notation when it is tiny (a step cut many times), where the plain forms would run to a
+/// hundred digits or show only zeros.
+struct Load(f64);
+
+impl std::fmt::Display for Load {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let t = self.0;
+        match f.precision() {
+            _ if t != 0.0 && t.abs() < 1e-4 => write!(f, "{t:.6e}"),
+            Some(digits) => write!(f, "{t:.digits$}"),
+            None => write!(f, "{t}"),
+        }
     }
 }
