@@ -3,7 +3,6 @@
 //! Every check of user input happens here, before any solve, with an error that names the key
 //! (`material[1].poisson`), the set, the body or the element. `mortar check` runs exactly this.
 
-use crate::{within_bounds, MAX_MAGNITUDE};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -13,6 +12,7 @@ use crate::fe::ElementType;
 use crate::io::case_file::{CaseFile, LoadCurveSpec, MeshPart};
 use crate::material::Material;
 use crate::mesh::{FaceRef, Mesh};
+use crate::{within_bounds, MAX_MAGNITUDE};
 
 /// Largest accepted `newton.max_it`.
 const MAX_NEWTON_ITS: usize = 10_000;

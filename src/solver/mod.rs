@@ -868,3 +868,19 @@ impl std::fmt::Display for Load {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::Load;
+
+    #[test]
+    fn loads_print_as_asked_unless_tiny() {
+        assert_eq!(format!("{:.6}", Load(0.5)), "0.500000");
+        assert_eq!(format!("{}", Load(0.15625)), "0.15625");
+        assert_eq!(format!("{}", Load(0.0)), "0");
+        // A step cut 483 times: not 150 digits, not zeros.
+        let tiny = 0.5f64.powi(483);
+        assert_eq!(format!("{}", Load(tiny)), format!("{tiny:.6e}"));
+        assert_eq!(format!("{:.6}", Load(tiny)), format!("{tiny:.6e}"));
+    }
+}
