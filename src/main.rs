@@ -275,7 +275,7 @@ fn run_command(
             if rank == 0 {
                 warn_unused_options(&petsc);
             }
-            Ok(())
+            finalize(petsc, &world)
         }
         Err(e) => Err(abort_unless_collective(&world, e, rank, size)),
     }
@@ -336,7 +336,7 @@ fn study_command(
         warn_unused_options(&petsc);
     }
     match result {
-        Ok(_) => Ok(()),
+        Ok(_) => finalize(petsc, &world),
         Err(e) => Err(abort_unless_collective(&world, e, rank, size)),
     }
 }
@@ -391,6 +391,14 @@ fn abort_unless_collective(world: &SimpleCommunicator, e: Error, rank: i32, size
     }
     eprintln!("mortar: error: [rank {rank}] {e}");
     world.abort(1)
+}
+
+/// Ends PETSc, then MPI. A failure of PETSc's end (an unwritable `-log_view` file) may be one
+/// rank's while the others wait inside it: the job is then aborted rather than left hanging.
+fn finalize(mut petsc: Petsc, world: &SimpleCommunicator) -> Result<()> {
+    petsc
+        .finalize()
+        .map_err(|e| abort_unless_collective(world, e, world.rank(), world.size()))
 }
 
 /// An error every rank has agreed on, printed by the one rank that holds it, before any rank

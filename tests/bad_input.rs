@@ -666,6 +666,9 @@ value = [0.0, 0.0, -1.0]
             "mesh[0].body",
         ),
         run("second_file_after_the_case", text(VALID), "extra.toml").args(&["extra.toml"]),
+        run("log_view_unwritable", text(VALID), "-log_view")
+            .file("not_a_folder", Text("a file\n"))
+            .args(&["-log_view", ":not_a_folder/log.txt"]),
         run("stray_word_after_an_option_value", text(VALID), "extra.toml")
             .args(&["-ksp_type", "preonly", "extra.toml"]),
         check(

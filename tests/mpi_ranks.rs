@@ -98,3 +98,22 @@ fn a_rank_local_failure_aborts_instead_of_hanging() {
     assert_eq!(lines.len(), 1, "{lines:?}");
     assert!(lines[0].contains("[rank 1]"), "{}", lines[0]);
 }
+
+/// A `-log_view` file rank 0 cannot write fails inside `PetscFinalize` on that rank alone,
+/// after the results are written, while the other rank waits in it: the job is aborted with
+/// the reason (it used to hang) and the results stay on disk.
+#[test]
+fn an_unwritable_log_aborts_at_the_end_instead_of_hanging() {
+    let case = common::write_case("two_rank_bad_log", &common::thick_sphere_case("hex8", 1));
+    let out_dir = case.parent().unwrap().join("out");
+    let blocker = case.parent().unwrap().join("not_a_folder");
+    std::fs::write(&blocker, "a file").unwrap();
+    let log = format!(":{}", blocker.join("log.txt").display());
+    let out = common::run_raw(&case, 2, &out_dir, &["-q", "-log_view", &log]);
+    assert_ne!(out.status.code(), Some(0));
+    assert_ne!(out.status.code(), Some(110), "timed out");
+    let lines = error_lines(&out);
+    assert_eq!(lines.len(), 1, "{lines:?}");
+    assert!(lines[0].contains("-log_view"), "{}", lines[0]);
+    assert!(out_dir.join("summary.json").is_file());
+}

@@ -23,6 +23,8 @@ pub struct Petsc {
     universe: mpi::environment::Universe,
     /// The ranks of a run on fewer ranks than the job ([`Petsc::on_first_ranks`]).
     scope: RefCell<Option<Rc<SimpleCommunicator>>>,
+    /// `PetscFinalize` has run ([`Petsc::finalize`]); `Drop` then leaves it.
+    finalized: bool,
 }
 
 /// Initializes MPI (once per process).
@@ -96,6 +98,7 @@ impl Petsc {
             _argv: argv,
             universe,
             scope: RefCell::new(None),
+            finalized: false,
         })
     }
 
@@ -163,8 +166,29 @@ impl Petsc {
     }
 }
 
+impl Petsc {
+    /// Ends PETSc (collective), reporting its failure: what PETSc writes at the end of a run
+    /// (a `-log_view` file) may fail to be written, on one rank only, while the others wait
+    /// inside `PetscFinalize`, so the caller should abort the job on an error. MPI ends when
+    /// `self` drops, after this.
+    pub fn finalize(&mut self) -> Result<()> {
+        self.finalized = true;
+        // SAFETY: as in `Drop`: every PETSc object of the program is gone by now (the caller
+        // owns none; this guard was created first).
+        chk!(PetscFinalize()).map_err(|e| {
+            Error::Other(format!(
+                "PETSc could not finish the run (what it writes at the end, such as a \
+                 -log_view file, may be missing): {e}"
+            ))
+        })
+    }
+}
+
 impl Drop for Petsc {
     fn drop(&mut self) {
+        if self.finalized {
+            return;
+        }
         // SAFETY: every PETSc object owned by the program is dropped before this guard (it is
         // created first in main and dropped last). A finalize error cannot be returned from
         // Drop; print it rather than lose it.
