@@ -4,15 +4,17 @@
 //! 10 degrees and facing the other way, so that the overlap is a genuine clipped polygon),
 //! integrated with `integrate_pair` (projection, clipping, pallets, quadrature, inverse maps,
 //! weights). Quad4-Quad4 with scheme 2 and the default degree 4; Quad9-Quad9 with scheme 2 and
-//! degree 8 (each Quad9 face is 4 sub-segments, so a face pair is 16 sub-segment pairs).
+//! degree 8 (each Quad9 face is 4 sub-segments, so a face pair is 16 sub-segment pairs). Each
+//! with the overlaps split into centroid pallets (the default) and into fans (`_fan`: two
+//! pallets fewer per overlap polygon).
 //!
 //! Group `mortar_pair_linearized`: the same pairs with `integrate_pair_linearized` (the weights
 //! and their exact derivatives with respect to all node coordinates, the consistent tangent).
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use mortar::contact::mortar::{
-    integrate_pair, integrate_pair_linearized, FaceGeom, IntegrationOptions, RejectStats,
-    TractionScheme,
+    integrate_pair, integrate_pair_linearized, FaceGeom, IntegrationOptions, PalletSplit,
+    RejectStats, TractionScheme,
 };
 use mortar::fe::FaceType;
 
@@ -37,17 +39,27 @@ fn face(kind: FaceType, angle: f64, shift: [f64; 2], flip: bool) -> Vec<[f64; 3]
 }
 
 /// The benchmarked pair of `kind`: secondary, primary and options.
-fn pair(kind: FaceType, degree: usize) -> (Vec<[f64; 3]>, Vec<[f64; 3]>, IntegrationOptions) {
+fn pair(
+    kind: FaceType,
+    degree: usize,
+    pallets: PalletSplit,
+) -> (Vec<[f64; 3]>, Vec<[f64; 3]>, IntegrationOptions) {
     let sec = face(kind, 0.0, [0.0, 0.0], false);
     let pri = face(kind, 10f64.to_radians(), [0.33, 0.33], true);
     let opts = IntegrationOptions {
         scheme: TractionScheme::Corners,
         degree,
+        pallets,
     };
     (sec, pri, opts)
 }
 
-const CASES: [(FaceType, usize); 2] = [(FaceType::Quad4, 4), (FaceType::Quad9, 8)];
+const CASES: [(FaceType, usize, PalletSplit); 4] = [
+    (FaceType::Quad4, 4, PalletSplit::Centroid),
+    (FaceType::Quad9, 8, PalletSplit::Centroid),
+    (FaceType::Quad4, 4, PalletSplit::Fan),
+    (FaceType::Quad9, 8, PalletSplit::Fan),
+];
 
 /// Throughput of one pair kernel (returning the overlap area) on the pairs of [`CASES`].
 fn bench_kernel(
@@ -57,12 +69,16 @@ fn bench_kernel(
 ) {
     let mut group = c.benchmark_group(group_name);
     group.throughput(Throughput::Elements(1));
-    for (kind, degree) in CASES {
-        let (sec, pri, opts) = pair(kind, degree);
+    for (kind, degree, pallets) in CASES {
+        let (sec, pri, opts) = pair(kind, degree, pallets);
         let (s, p) = (FaceGeom { kind, x: &sec }, FaceGeom { kind, x: &pri });
         let area = kernel(&s, &p, &opts, &mut RejectStats::default());
         assert!(area > 0.1, "{kind:?}: overlap area {area}");
-        group.bench_function(kind.name(), |b| {
+        let name = match pallets {
+            PalletSplit::Centroid => kind.name().to_string(),
+            PalletSplit::Fan => format!("{}_fan", kind.name()),
+        };
+        group.bench_function(name, |b| {
             b.iter(|| kernel(&s, &p, &opts, &mut RejectStats::default()))
         });
     }

@@ -6,7 +6,7 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use crate::contact::mortar::{traction_nodes, TractionScheme};
+use crate::contact::mortar::{traction_nodes, PalletSplit, TractionScheme};
 use crate::error::{Error, Result};
 use crate::fe::ElementType;
 use crate::io::case_file::{CaseFile, LoadCurveSpec, MeshPart};
@@ -202,6 +202,8 @@ pub struct Interface {
     pub uzawa_tol: f64,
     pub uzawa_max: usize,
     pub quadrature_degree: Option<usize>,
+    /// How overlaps are split into integration pallets (mortar only).
+    pub pallets: PalletSplit,
     /// Contact: Coulomb coefficient mu (0 for tied interfaces).
     pub friction: f64,
     /// Contact: tangential penalty factor alpha_T.
@@ -807,6 +809,12 @@ fn build_interface(
             return Err(format!("{key}.quadrature_degree = {q}: must be in 1..=10"));
         }
     }
+    let pallets = match spec.pallets.as_deref() {
+        None => PalletSplit::default(),
+        Some(name) => PalletSplit::from_name(name).ok_or_else(|| {
+            format!("{key}.pallets = \"{name}\": must be \"centroid\" or \"fan\"")
+        })?,
+    };
     let friction = spec.friction.unwrap_or(0.0);
     if !(friction >= 0.0 && friction.is_finite()) {
         return Err(format!(
@@ -865,6 +873,7 @@ fn build_interface(
         uzawa_tol,
         uzawa_max,
         quadrature_degree: spec.quadrature_degree,
+        pallets,
         friction,
         tangential_penalty,
         uzawa_slip_tol,

@@ -501,6 +501,11 @@ value = [0.0, 0.0, -1.0]
             "interface[0].method",
         ),
         check(
+            "interface_unknown_pallet_split",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"tied\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\npallets = \"delaunay\"\n"),
+            "interface[0].pallets",
+        ),
+        check(
             "method_on_tied_interface",
             valid_plus("[[interface]]\nname = \"i\"\nkind = \"tied\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\nmethod = \"node_on_segment\"\n"),
             "interface[0].method",

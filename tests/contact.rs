@@ -4,7 +4,8 @@
 //!   non-matching meshes under a uniform follower pressure p0. The exact solution is a
 //!   homogeneous finite deformation with Cauchy stress `sigma_zz = -p0` and every contact
 //!   pressure `p_A = p0`; checked for Hex8, Hex20, Hex27 and Tet10, either side secondary,
-//!   schemes 2 and 3 (and 1 on Hex27), to 1e-10, with the contact forces summing to zero;
+//!   schemes 2 and 3 (and 1 on Hex27), to 1e-10, with the contact forces summing to zero,
+//!   and with the overlaps split into fans of pallets (`pallets = "fan"`) as well;
 //! - the assembled Jacobian of a frictional sliding scene against PETSc's finite-difference
 //!   Jacobian (`-snes_test_jacobian`) at every Newton iterate;
 //! - the same results on 1 and 2 ranks.
@@ -121,6 +122,45 @@ fn contact_patch_test_non_matching_blocks() {
     }
 }
 
+/// The patch test with the overlaps split into fans of pallets: the same integrals on these
+/// affine face pairs, so the same exactness (scheme 2, either side secondary), with half the
+/// quadrature points of the centroid split (every overlap of these aligned grids is a
+/// rectangle: 2 pallets instead of 4).
+#[test]
+fn contact_patch_test_with_fan_pallets() {
+    for (element, lo, up) in [("hex8", [3, 3], [4, 5]), ("hex27", [2, 2], [3, 3])] {
+        for secondary in ["low", "up"] {
+            let name = format!("contact_patch_fan_{element}_{secondary}");
+            let centroid = patch_case(element, lo, up, secondary, 2);
+            let case = common::write_case(&name, &with_fan_pallets(&centroid));
+            let (out, _) = common::run_case(&case, 1, &["-q"]);
+            let stress = common::metric(&out, "max_rel_stress_error");
+            let pressure = common::metric(&out, "max_rel_pressure_error");
+            assert!(stress < 1e-10, "{name}: stress error {stress:e}");
+            assert!(pressure < 1e-10, "{name}: pressure error {pressure:e}");
+            let case = common::write_case(&format!("{name}_centroid"), &centroid);
+            let (centroid_out, _) = common::run_case(&case, 1, &["-q"]);
+            let points = |out| common::metric(out, "pairs_blocks_quadrature_points");
+            let (fan, all) = (points(&out), points(&centroid_out));
+            assert!(
+                fan > 0.0 && 2.0 * fan == all,
+                "{name}: {fan} against {all} points"
+            );
+        }
+    }
+}
+
+/// A case text whose (single) contact interface splits its overlaps into fans of pallets.
+fn with_fan_pallets(text: &str) -> String {
+    let fan = text.replacen(
+        "kind = \"contact\"\n",
+        "kind = \"contact\"\npallets = \"fan\"\n",
+        1,
+    );
+    assert!(fan.contains("pallets = \"fan\""));
+    fan
+}
+
 /// The patch test's shipped scene passes as shipped.
 #[test]
 fn contact_patch_scene() {
@@ -197,17 +237,21 @@ fn jacobian_test_ratios(stdout: &str) -> Vec<f64> {
 /// 2e-8), so the test bounds the median and the share of iterates above 1e-4 (1 in 40, which
 /// the tie-break keeps: at the start of a step round-off no longer picks the tangent).
 ///
-/// Run twice: as the slide is (the small upper block's surface secondary, fully covered), and
+/// Run three times: as the slide is (the small upper block's surface secondary, fully covered);
 /// with the sides swapped, so that the lower surface's nodes under the upper block's edges are
 /// partly covered: they carry the coverage scale of their penalties and, below 5 % coverage,
 /// the fade of their traction, whose derivatives are then part of the tangent (checked to
 /// fail without the scale's: median 2.1e-4, 63 of 98 iterates above 1e-4; without the fade's:
-/// median 3.3e-4).
+/// median 3.3e-4); and with the overlaps split into fans of pallets.
 #[test]
 fn contact_jacobian_matches_finite_differences() {
     for (name, text) in [
         ("contact_jacobian_fd", common::slide_case(5)),
         ("contact_jacobian_fd_partly_covered", swapped_slide()),
+        (
+            "contact_jacobian_fd_fan",
+            with_fan_pallets(&common::slide_case(5)),
+        ),
     ] {
         let case = common::write_case(name, &text);
         jacobian_matches_finite_differences(&case);

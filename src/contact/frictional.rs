@@ -165,7 +165,7 @@ use crate::contact::law::{
 };
 use crate::contact::mortar::{
     integrate_pair, integrate_pair_linearized, sub_segments, traction_node_count, traction_nodes,
-    traction_shape_on, FaceGeom, IntegrationOptions, LinearizedWeights, RejectStats,
+    traction_shape_on, FaceGeom, IntegrationOptions, LinearizedWeights, PalletSplit, RejectStats,
     TractionScheme,
 };
 use crate::contact::node_on_segment::{self as nts, NodeGeometry, NodeLaw, Segment};
@@ -356,6 +356,7 @@ pub struct ContactInterface {
     /// Violation after the previous augmentation of this step (for the penalty growth).
     last_violation: f64,
     quadrature_degree: Option<usize>,
+    pallets: PalletSplit,
     pub passes: Vec<ContactPass>,
     /// Rejected and integrated segment pairs of this rank's last evaluation.
     pub stats: std::cell::RefCell<RejectStats>,
@@ -440,6 +441,7 @@ impl ContactInterface {
             stick_all,
             scheme: self.scheme,
             degree: self.quadrature_degree,
+            pallets: self.pallets,
             scale: self.penalty_scale,
             x,
             x_old,
@@ -483,6 +485,7 @@ impl ContactInterfaces {
                 penalty_scale: 1.0,
                 last_violation: f64::INFINITY,
                 quadrature_degree: iface.quadrature_degree,
+                pallets: iface.pallets,
                 passes,
                 stats: Default::default(),
             });
@@ -1008,6 +1011,7 @@ struct EvalContext<'a> {
     stick_all: bool,
     scheme: TractionScheme,
     degree: Option<usize>,
+    pallets: PalletSplit,
     scale: f64,
     /// Current and last converged positions of every node.
     x: &'a [[f64; 3]],
@@ -1429,6 +1433,7 @@ impl ContactPass {
                 if let Some(d) = ctx.degree {
                     opts.degree = d;
                 }
+                opts.pallets = ctx.pallets;
                 let (sg, pg) = (
                     FaceGeom {
                         kind: sf.kind,

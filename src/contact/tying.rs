@@ -508,6 +508,7 @@ fn integrate_side(
             let opts = IntegrationOptions {
                 scheme: iface.scheme,
                 degree,
+                pallets: iface.pallets,
             };
             let w = integrate_pair(
                 &FaceGeom {

@@ -42,9 +42,25 @@
 //!
 //! # Pallets
 //!
-//! [`pallets`] splits a convex polygon into triangles from its area centroid, one per edge (also
-//! for a triangle): the split depends continuously on the vertices, unlike a diagonal or Delaunay
-//! split whose choice flips with round-off on cocircular polygons (ALGORITHM.md 3.5).
+//! [`pallets`] splits a convex polygon of `N` vertices into the triangles the quadrature rule
+//! runs on, each the triangle of one polygon edge with an apex ([`PalletSplit`]):
+//!
+//! - [`PalletSplit::Centroid`] (the default, ALGORITHM.md 3.5): `N` triangles from the area
+//!   centroid, one per edge (also for a triangle). The split depends continuously on the
+//!   vertices, unlike a diagonal or Delaunay split whose choice flips with round-off on
+//!   cocircular polygons: when a vertex appears or disappears, its pallet appears or disappears
+//!   with zero area.
+//! - [`PalletSplit::Fan`]: `N - 2` triangles from one vertex, the apex, chosen by the vertices'
+//!   provenance ([`VertexOrigin`], in its order: the lowest-numbered vertex of the first
+//!   polygon inside the overlap, else of the second, else the first crossing), not by position
+//!   nor by the order in which the clipping returns the vertices (which depends on a round-off
+//!   comparison of the two polygons' sizes). The two splits tile the same polygon, so a rule
+//!   exact for the integrand gives the same integral on both (the mortar integrand is a
+//!   polynomial on affine pairs, where both are exact: the patch tests); a rectangle takes 2
+//!   pallets instead of 4, a hexagon 4 instead of 6. The price: the apex follows the overlap's
+//!   topology, so when the overlap gains or loses a vertex the split can jump, and with it the
+//!   quadrature error on curved faces (not the integral of an integrand the rule integrates
+//!   exactly). While the topology stays, the split moves continuously with the vertices.
 
 use crate::fe::shape::Scalar;
 
@@ -142,8 +158,9 @@ struct Vertex {
 }
 
 /// Where a vertex of the polygon returned by [`clip_convex_traced`] comes from: the input is the
-/// pair `(first, second)` as passed, with the input vertex numbering.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// pair `(first, second)` as passed, with the input vertex numbering. Ordered (the first
+/// polygon's vertices, the second's, crossings, unresolved) for the apex of a fan of pallets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub enum VertexOrigin {
     /// Input vertex `i` of the first polygon.
     First(usize),
@@ -395,12 +412,8 @@ fn clip_vertices(first: &[Point], second: &[Point], scale: f64) -> Result<Vec<Ve
     }
 }
 
-/// Area centroid of a polygon; the vertex mean if its area is not positive.
-pub fn area_centroid(p: &[Point]) -> Point {
-    area_centroid_at(p)
-}
-
-/// [`area_centroid`] for any [`Scalar`] (the choice between centroid and mean by the real part).
+/// Area centroid of a polygon, the vertex mean if its area is not positive, for any [`Scalar`]
+/// (the choice between centroid and mean by the real part).
 pub fn area_centroid_at<T: Scalar>(p: &[[T; 2]]) -> [T; 2] {
     let n = p.len() as f64;
     let zero = T::from(0.0);
@@ -426,15 +439,63 @@ pub fn area_centroid_at<T: Scalar>(p: &[[T; 2]]) -> [T; 2] {
     }
 }
 
-/// Centroid "pallets": the polygon split into triangles `(centroid, p_i, p_i+1)` from its area
-/// centroid (N vertices -> N triangles, also for a triangle). Never Delaunay (ALGORITHM.md 3.5).
-pub fn pallets(p: &[Point]) -> Vec<[Point; 3]> {
+/// How an overlap polygon is split into pallets (module docs, "Pallets"). Case key
+/// `pallets` of an interface.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PalletSplit {
+    /// `N` triangles `(centroid, p_i, p_i+1)` from the area centroid.
+    #[default]
+    Centroid,
+    /// `N - 2` triangles `(p_0, p_i, p_i+1)` from the first vertex.
+    Fan,
+}
+
+impl PalletSplit {
+    /// The split of a case file's name (`"centroid"` or `"fan"`).
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "centroid" => Some(PalletSplit::Centroid),
+            "fan" => Some(PalletSplit::Fan),
+            _ => None,
+        }
+    }
+
+    /// The apex shared by the pallets of polygon `p` (at least three vertices), whose vertices
+    /// come from `origins` (one per vertex; empty: the fan's apex is the first vertex).
+    pub fn apex<T: Scalar>(self, p: &[[T; 2]], origins: &[VertexOrigin]) -> [T; 2] {
+        match self {
+            PalletSplit::Centroid => area_centroid_at(p),
+            PalletSplit::Fan => p[fan_apex(origins)],
+        }
+    }
+
+    /// The edges `(i, j)` of a polygon of `n >= 3` vertices (origins as for [`Self::apex`])
+    /// whose triangle with the apex is a pallet, counter-clockwise.
+    pub fn edges(self, n: usize, origins: &[VertexOrigin]) -> impl Iterator<Item = (usize, usize)> {
+        let (first, count) = match self {
+            PalletSplit::Centroid => (0, n),
+            PalletSplit::Fan => (fan_apex(origins) + 1, n.saturating_sub(2)),
+        };
+        (first..first + count).map(move |i| (i % n, (i + 1) % n))
+    }
+}
+
+/// The index of a fan's apex: the vertex of the smallest origin (the first vertex without
+/// origins).
+fn fan_apex(origins: &[VertexOrigin]) -> usize {
+    (0..origins.len()).min_by_key(|&i| origins[i]).unwrap_or(0)
+}
+
+/// The pallets of polygon `p`, with vertex origins as for [`PalletSplit::apex`]: triangles
+/// `(apex, p_i, p_j)` (module docs, "Pallets"); none for fewer than three vertices.
+pub fn pallets(p: &[Point], origins: &[VertexOrigin], split: PalletSplit) -> Vec<[Point; 3]> {
     if p.len() < 3 {
         return Vec::new();
     }
-    let c = area_centroid(p);
-    (0..p.len())
-        .map(|i| [c, p[i], p[(i + 1) % p.len()]])
+    let apex = split.apex(p, origins);
+    split
+        .edges(p.len(), origins)
+        .map(|(i, j)| [apex, p[i], p[j]])
         .collect()
 }
 
@@ -605,11 +666,14 @@ mod tests {
             prop_assert!((area_of(&swapped) - area).abs() < 1e-12);
             // Pallets tile the polygon.
             if let Clipped::Polygon(p) = &clipped {
-                let tris = pallets(p);
-                prop_assert_eq!(tris.len(), p.len());
-                let sum: f64 = tris.iter().map(|t| polygon_area(t)).sum();
-                prop_assert!((sum - area).abs() < 1e-13);
-                prop_assert!(tris.iter().all(|t| polygon_area(t) >= -1e-15));
+                let counts = [(PalletSplit::Centroid, p.len()), (PalletSplit::Fan, p.len() - 2)];
+                for (split, count) in counts {
+                    let tris = pallets(p, &[], split);
+                    prop_assert_eq!(tris.len(), count);
+                    let sum: f64 = tris.iter().map(|t| polygon_area(t)).sum();
+                    prop_assert!((sum - area).abs() < 1e-13);
+                    prop_assert!(tris.iter().all(|t| polygon_area(t) >= -1e-15));
+                }
             }
         }
     }
@@ -828,16 +892,41 @@ mod tests {
     #[test]
     fn pallets_of_a_triangle_and_a_pentagon() {
         let tri = [[0.0, 0.0], [2.0, 0.0], [0.0, 1.0]];
-        let t = pallets(&tri);
+        let t = pallets(&tri, &[], PalletSplit::Centroid);
         assert_eq!(t.len(), 3);
         for p in &t {
             assert!((polygon_area(p) - 1.0 / 3.0).abs() < 1e-15);
             assert!((p[0][0] - 2.0 / 3.0).abs() < 1e-15 && (p[0][1] - 1.0 / 3.0).abs() < 1e-15);
         }
+        assert_eq!(pallets(&tri, &[], PalletSplit::Fan), vec![tri]);
         let pent = [[0.0, 0.0], [2.0, 0.0], [2.5, 1.0], [1.0, 2.0], [-0.5, 1.0]];
-        let sum: f64 = pallets(&pent).iter().map(|p| polygon_area(p)).sum();
-        assert!((sum - polygon_area(&pent)).abs() < 1e-14);
-        assert!(pallets(&pent[..2]).is_empty());
+        for (split, count) in [(PalletSplit::Centroid, 5), (PalletSplit::Fan, 3)] {
+            let tris = pallets(&pent, &[], split);
+            assert_eq!(tris.len(), count);
+            let sum: f64 = tris.iter().map(|p| polygon_area(p)).sum();
+            assert!((sum - polygon_area(&pent)).abs() < 1e-14);
+            assert!(tris.iter().all(|t| polygon_area(t) > 0.0));
+            assert!(pallets(&pent[..2], &[], split).is_empty());
+        }
+        // The fan's apex is the first vertex; its pallets share it.
+        let fan = pallets(&pent, &[], PalletSplit::Fan);
+        assert!(fan.iter().all(|t| t[0] == pent[0]));
+        assert_eq!(fan[2], [pent[0], pent[3], pent[4]]);
+        // With origins, the apex is the vertex of the smallest origin, whatever its place in
+        // the list: here vertex 3 (the first polygon's vertex 0); the fan goes round from it.
+        let origins = [
+            VertexOrigin::Second(2),
+            VertexOrigin::Crossing {
+                first: [0, 1],
+                second: [1, 2],
+            },
+            VertexOrigin::First(1),
+            VertexOrigin::First(0),
+            VertexOrigin::Second(0),
+        ];
+        let fan = pallets(&pent, &origins, PalletSplit::Fan);
+        let expected = [[3, 4, 0], [3, 0, 1], [3, 1, 2]].map(|t| t.map(|i| pent[i]));
+        assert_eq!(fan, expected);
     }
 
     /// The point a provenance stands for: the input vertex, or the crossing of the two lines.

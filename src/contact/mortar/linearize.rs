@@ -36,7 +36,7 @@
 //!    - *Level 2* (derivatives with respect to those 16 plane coordinates): the overlap
 //!      vertices from their provenance (a crossing of the lines `a b` and `c d` is
 //!      `a + t (b - a)`, `t = o_a / (o_a - o_b)`, `o` the orientation about `c d`), the pallet
-//!      centroid, the pallet areas, in `DualSVec64<16>` (once per sub-segment pair or pallet);
+//!      apex, the pallet areas, in `DualSVec64<16>` (once per sub-segment pair or pallet);
 //!      then per quadrature point, with the chain rule written out in plain floats
 //!      (`PlaneValue`, whose docs give the formulas): the point, its local coordinates on both
 //!      projected sub-segments, `det(dP/dlocal)`, the face parent coordinates `xi_s`, `xi_m`
@@ -138,7 +138,7 @@ mod dual_reference;
 use nalgebra::DMatrix;
 use num_dual::DualSVec64;
 
-use super::clip::{area_centroid_at, VertexOrigin};
+use super::clip::{PalletSplit, VertexOrigin};
 use super::pair::{
     det2, diameter, is_finite_face, overlap_of_sub_pair, primary_subs, solve2, Bilinear, FaceGeom,
     IntegrationOptions, LocalPoint, Overlap, PairFailure, Plane, Projected, RejectStats,
@@ -324,6 +324,7 @@ struct Kernel<'a> {
     pri: &'a FaceGeom<'a>,
     scheme: TractionScheme,
     rule: Rule2,
+    pallets: PalletSplit,
     level2: Level2<'a>,
 }
 
@@ -343,6 +344,7 @@ impl<'a> Kernel<'a> {
             pri,
             scheme: opts.scheme,
             rule: FaceType::Tri3.quadrature(opts.degree),
+            pallets: opts.pallets,
             level2,
         }
     }
@@ -428,17 +430,17 @@ impl<'a> Kernel<'a> {
         let (polygon, unresolved) = traced_polygon(overlap, &s_map, &m_map);
         tangent.unresolved += unresolved;
         let sec_jacobian = overlap.s.seg.parent_jacobian();
-        let centroid = area_centroid_at(&polygon);
-        for i in 0..polygon.len() {
-            let (a, b) = (polygon[i], polygon[(i + 1) % polygon.len()]);
-            let u = [a[0] - centroid[0], a[1] - centroid[1]];
-            let v = [b[0] - centroid[0], b[1] - centroid[1]];
+        let apex = self.pallets.apex(&polygon, &overlap.origins);
+        for (i, j) in self.pallets.edges(polygon.len(), &overlap.origins) {
+            let (a, b) = (polygon[i], polygon[j]);
+            let u = [a[0] - apex[0], a[1] - apex[1]];
+            let v = [b[0] - apex[0], b[1] - apex[1]];
             let twice_area = det2(u, v);
             if twice_area.re <= 0.0 {
                 continue;
             }
             let pallet = Pallet {
-                centroid: centroid.map(|c| PlaneValue::of(&c)),
+                apex: apex.map(|c| PlaneValue::of(&c)),
                 u: u.map(|c| PlaneValue::of(&c)),
                 v: v.map(|c| PlaneValue::of(&c)),
                 twice_area: PlaneValue::of(&twice_area),
@@ -689,7 +691,7 @@ fn plane_chain<const N: usize>(
 /// so the results are bit for bit those of the dual code (module docs, "Exactness"). The
 /// derivatives are those of the module docs:
 ///
-/// - the point `P = c + q_0 u + q_1 v` of a pallet (centroid `c`, edges `u`, `v` from it):
+/// - the point `P = c + q_0 u + q_1 v` of a pallet (apex `c`, edges `u`, `v` from it):
 ///   `dP = dc + q_0 du + q_1 dv`;
 /// - its local coordinates on a projected sub-segment with vertices `Q_i`: on a triangle the
 ///   barycentric coordinates `det [d b] / det [a b]`, `det [a d] / det [a b]` (`a`, `b` the
@@ -773,9 +775,9 @@ fn plane_det2(u: &[PlaneValue; 2], v: &[PlaneValue; 2]) -> PlaneValue {
     u[0].times(&v[1]).minus(&u[1].times(&v[0]))
 }
 
-/// The level-2 pallet: its centroid, the edges `u`, `v` from the centroid and `det [u v]`.
+/// The level-2 pallet: its apex, the edges `u`, `v` from the apex and `det [u v]`.
 struct Pallet {
-    centroid: [PlaneValue; 2],
+    apex: [PlaneValue; 2],
     u: [PlaneValue; 2],
     v: [PlaneValue; 2],
     twice_area: PlaneValue,
@@ -786,7 +788,7 @@ impl Pallet {
     fn point(&self, q: [f64; 2]) -> [PlaneValue; 2] {
         let mut p = [PlaneValue::ZERO; 2];
         for (i, pi) in p.iter_mut().enumerate() {
-            let (c, u, v) = (&self.centroid[i], &self.u[i], &self.v[i]);
+            let (c, u, v) = (&self.apex[i], &self.u[i], &self.v[i]);
             pi.re = c.re + u.re * q[0] + v.re * q[1];
             for k in 0..PLANE_SLOTS {
                 pi.d[k] = c.d[k] + u.d[k] * q[0] + v.d[k] * q[1];
@@ -1096,6 +1098,8 @@ struct SubPairTangent {
     active: Vec<usize>,
     values: Vec<f64>,
     area: f64,
+    /// Quadrature points tabulated.
+    points_added: usize,
     plane: DMatrix<f64>,
     face: DMatrix<f64>,
     /// The tabulation of one pallet (see above).
@@ -1119,6 +1123,7 @@ impl SubPairTangent {
             active: Vec::new(),
             values: vec![0.0; rows],
             area: 0.0,
+            points_added: 0,
             plane: DMatrix::zeros(rows, PLANE_SLOTS),
             face: DMatrix::zeros(rows, 3 * ns),
             coefficients: DMatrix::zeros(rows, 5 * points),
@@ -1143,6 +1148,7 @@ impl SubPairTangent {
     fn clear(&mut self) {
         self.values.fill(0.0);
         self.area = 0.0;
+        self.points_added = 0;
         self.plane.fill(0.0);
         self.face.fill(0.0);
         self.unresolved = 0;
@@ -1161,6 +1167,7 @@ impl SubPairTangent {
         let q = self.points;
         let w = values.weight;
         self.area += w;
+        self.points_added += 1;
         let directions = [
             &weight.d,
             &at.xi_s[0].d,
@@ -1259,7 +1266,9 @@ impl SubPairTangent {
                 }
             }
         }
-        SubPairOutcome::Integrated
+        SubPairOutcome::Integrated {
+            points: self.points_added,
+        }
     }
 }
 
@@ -1267,22 +1276,9 @@ impl SubPairTangent {
 mod tests {
     use super::*;
     use crate::contact::mortar::pair::integrate_pair;
-    use crate::contact::mortar::segments::traction_nodes;
-
-    const SCHEMES: [TractionScheme; 3] = [
-        TractionScheme::FaceShape,
-        TractionScheme::Corners,
-        TractionScheme::PiecewiseLinear,
-    ];
+    use crate::contact::mortar::test_support::{settings, with_splits, Setting, SCHEMES};
 
     type Vec3 = [f64; 3];
-
-    fn allowed_schemes(kind: FaceType) -> Vec<TractionScheme> {
-        SCHEMES
-            .into_iter()
-            .filter(|&s| traction_nodes(kind, s).is_ok())
-            .collect()
-    }
 
     /// Small deterministic xorshift generator.
     struct Rng(u64);
@@ -1371,13 +1367,20 @@ mod tests {
         (xs, xp)
     }
 
+    fn options(how: Setting, sec: FaceType, pri: FaceType) -> IntegrationOptions {
+        IntegrationOptions {
+            pallets: how.1,
+            ..IntegrationOptions::for_faces(how.0, sec, pri)
+        }
+    }
+
     fn linearized(
         sec: (FaceType, &[Vec3]),
         pri: (FaceType, &[Vec3]),
-        scheme: TractionScheme,
+        how: Setting,
         stats: &mut RejectStats,
     ) -> LinearizedWeights {
-        let opts = IntegrationOptions::for_faces(scheme, sec.0, pri.0);
+        let opts = options(how, sec.0, pri.0);
         integrate_pair_linearized(
             &FaceGeom {
                 kind: sec.0,
@@ -1396,9 +1399,10 @@ mod tests {
     fn reference(
         sec: (FaceType, &[Vec3]),
         pri: (FaceType, &[Vec3]),
-        scheme: TractionScheme,
+        how: Setting,
     ) -> (Vec<f64>, RejectStats) {
-        let opts = IntegrationOptions::for_faces(scheme, sec.0, pri.0);
+        let scheme = how.0;
+        let opts = options(how, sec.0, pri.0);
         let mut stats = RejectStats::default();
         let w = integrate_pair(
             &FaceGeom {
@@ -1696,11 +1700,11 @@ mod tests {
     #[test]
     fn float_level2_reproduces_the_dual_reference() {
         for (st, pt) in all_type_pairs() {
-            for scheme in allowed_schemes(st) {
-                let opts = IntegrationOptions::for_faces(scheme, st, pt);
+            for how in settings(st) {
+                let opts = options(how, st, pt);
                 for seed in 0..2 {
                     let (xs, xp) = generic_pair(st, pt, seed);
-                    let what = format!("{st:?}-{pt:?} scheme {} seed {seed}", scheme.number());
+                    let what = format!("{st:?}-{pt:?} {how:?} seed {seed}");
                     assert_reproduces_reference((st, &xs), (pt, &xp), &opts, &what);
                     let flat = |x: &[Vec3]| x.iter().map(|p| [p[0], p[1], 0.0]).collect::<Vec<_>>();
                     let (fs, fp) = (flat(&xs), flat(&xp));
@@ -1712,9 +1716,9 @@ mod tests {
         for (i, pair) in BENDING_PAIRS.iter().enumerate() {
             let x: Vec<Vec3> = pair.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
             let (xs, xp) = x.split_at(9);
-            for scheme in SCHEMES {
-                let opts = IntegrationOptions { scheme, degree: 8 };
-                let what = format!("bending pair {i}, scheme {}", scheme.number());
+            for how in with_splits(SCHEMES) {
+                let opts = options(how, FaceType::Quad9, FaceType::Quad9);
+                let what = format!("bending pair {i}, {how:?}");
                 assert_reproduces_reference(
                     (FaceType::Quad9, xs),
                     (FaceType::Quad9, xp),
@@ -1733,11 +1737,11 @@ mod tests {
         for (sk, pk) in all_type_pairs() {
             for seed in 0..3 {
                 let (xs, xp) = generic_pair(sk, pk, seed);
-                for scheme in allowed_schemes(sk) {
-                    let what = format!("{sk:?} on {pk:?} {scheme:?} seed {seed}");
+                for how in settings(sk) {
+                    let what = format!("{sk:?} on {pk:?} {how:?} seed {seed}");
                     let mut stats = RejectStats::default();
-                    let w = linearized((sk, &xs), (pk, &xp), scheme, &mut stats);
-                    let (expected, expected_stats) = reference((sk, &xs), (pk, &xp), scheme);
+                    let w = linearized((sk, &xs), (pk, &xp), how, &mut stats);
+                    let (expected, expected_stats) = reference((sk, &xs), (pk, &xp), how);
                     assert_eq!(stats, expected_stats, "{what}");
                     assert!(
                         stats.pairs_integrated > 0 && w.area > 1e-3,
@@ -1763,12 +1767,12 @@ mod tests {
         for (sk, pk) in all_type_pairs() {
             let (xs, xp) = generic_pair(sk, pk, 7);
             let ns = xs.len();
-            let schemes = allowed_schemes(sk);
+            let schemes = settings(sk);
             let exact: Vec<(LinearizedWeights, RejectStats)> = schemes
                 .iter()
-                .map(|&scheme| {
+                .map(|&how| {
                     let mut stats = RejectStats::default();
-                    let w = linearized((sk, &xs), (pk, &xp), scheme, &mut stats);
+                    let w = linearized((sk, &xs), (pk, &xp), how, &mut stats);
                     (w, stats)
                 })
                 .collect();
@@ -1784,9 +1788,9 @@ mod tests {
                     (s, p)
                 };
                 let ((s_plus, p_plus), (s_minus, p_minus)) = (moved(1.0), moved(-1.0));
-                for (i, &scheme) in schemes.iter().enumerate() {
-                    let (plus, plus_stats) = reference((sk, &s_plus), (pk, &p_plus), scheme);
-                    let (minus, minus_stats) = reference((sk, &s_minus), (pk, &p_minus), scheme);
+                for (i, &how) in schemes.iter().enumerate() {
+                    let (plus, plus_stats) = reference((sk, &s_plus), (pk, &p_plus), how);
+                    let (minus, minus_stats) = reference((sk, &s_minus), (pk, &p_minus), how);
                     assert_eq!(plus_stats, exact[i].1, "{sk:?} on {pk:?} dof {j}");
                     assert_eq!(minus_stats, exact[i].1, "{sk:?} on {pk:?} dof {j}");
                     let fd: Vec<f64> = plus
@@ -1819,9 +1823,9 @@ mod tests {
         let mut worst: f64 = 0.0;
         for (sk, pk) in all_type_pairs() {
             let (xs, xp) = generic_pair(sk, pk, 11);
-            for scheme in allowed_schemes(sk) {
+            for how in settings(sk) {
                 let mut stats = RejectStats::default();
-                let w = linearized((sk, &xs), (pk, &xp), scheme, &mut stats);
+                let w = linearized((sk, &xs), (pk, &xp), how, &mut stats);
                 let (ns, np, ndof) = (w.sec_nodes, w.pri_nodes, w.ndof());
                 let largest = max_abs(&w.dn1).max(max_abs(&w.dn2));
                 for k in 0..w.traction_nodes {
@@ -1829,7 +1833,7 @@ mod tests {
                         let sum1: f64 = (0..ns).map(|b| w.dn1[(k * ns + b) * ndof + j]).sum();
                         let sum2: f64 = (0..np).map(|c| w.dn2[(k * np + c) * ndof + j]).sum();
                         let error = (sum1 - sum2).abs() / largest;
-                        assert!(error < 1e-13, "{sk:?} on {pk:?} {scheme:?}: {error:e}");
+                        assert!(error < 1e-13, "{sk:?} on {pk:?} {how:?}: {error:e}");
                         worst = worst.max(error);
                     }
                 }
@@ -1849,9 +1853,9 @@ mod tests {
             let (xs, xp) = generic_pair(sk, pk, 13);
             let nodes: Vec<Vec3> = xs.iter().chain(&xp).copied().collect();
             let size = nodes.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
-            for scheme in allowed_schemes(sk) {
+            for how in settings(sk) {
                 let mut stats = RejectStats::default();
-                let w = linearized((sk, &xs), (pk, &xp), scheme, &mut stats);
+                let w = linearized((sk, &xs), (pk, &xp), how, &mut stats);
                 let ndof = w.ndof();
                 let largest = max_abs(&w.dn1).max(max_abs(&w.dn2));
                 for row in w.dn1.chunks(ndof).chain(w.dn2.chunks(ndof)) {
@@ -1872,7 +1876,7 @@ mod tests {
                         ];
                         assert!(
                             errors[0] < 1e-12 && errors[1] < 1e-12,
-                            "{sk:?} on {pk:?} {scheme:?} axis {axis}: {errors:?}"
+                            "{sk:?} on {pk:?} {how:?} axis {axis}: {errors:?}"
                         );
                         worst = [worst[0].max(errors[0]), worst[1].max(errors[1])];
                     }
@@ -1910,22 +1914,22 @@ mod tests {
         pri: (FaceType, &[Vec3]),
         what: &str,
     ) -> Vec<RejectStats> {
-        allowed_schemes(sec.0)
+        settings(sec.0)
             .into_iter()
-            .map(|scheme| {
+            .map(|how| {
                 let mut stats = RejectStats::default();
-                let w = linearized(sec, pri, scheme, &mut stats);
+                let w = linearized(sec, pri, how, &mut stats);
                 let all = w.n1.iter().chain(&w.n2).chain(&w.dn1).chain(&w.dn2);
                 assert!(
                     all.into_iter().chain([&w.area]).all(|v| v.is_finite()),
-                    "{what} {scheme:?}"
+                    "{what} {how:?}"
                 );
-                let (expected, expected_stats) = reference(sec, pri, scheme);
-                assert_eq!(stats, expected_stats, "{what} {scheme:?}");
+                let (expected, expected_stats) = reference(sec, pri, how);
+                assert_eq!(stats, expected_stats, "{what} {how:?}");
                 let error = max_difference(&values(&w), &expected);
                 assert!(
                     error <= 1e-12 * max_abs(&expected),
-                    "{what} {scheme:?}: {error:e}"
+                    "{what} {how:?}: {error:e}"
                 );
                 stats
             })

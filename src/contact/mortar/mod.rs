@@ -11,8 +11,9 @@
 //! - [`segments`]: the linear sub-segments of quadratic faces (the paper's Figure 1; Tri6 is
 //!   split into four triangles) and the traction functions `Phi` of the three schemes
 //!   ([`TractionScheme`]); scheme 1 is refused on Quad8 and Tri6 by [`traction_nodes`].
-//! - [`clip`]: robust intersection of convex polygons in the projection plane and the centroid
-//!   pallets the overlap is integrated on.
+//! - [`clip`]: robust intersection of convex polygons in the projection plane, and the pallets
+//!   (triangles from the overlap's centroid, or a fan from one of its vertices) the overlap is
+//!   integrated on.
 //! - [`pair`]: [`integrate_pair`], one secondary face against one primary face: projection
 //!   plane per secondary sub-segment (the face's geometric normal at the sub-segment centre),
 //!   clipping, pallet quadrature, and the weights with the same points for `n1` and `n2` (so
@@ -27,8 +28,10 @@ pub mod clip;
 pub mod linearize;
 pub mod pair;
 pub mod segments;
+#[cfg(test)]
+mod test_support;
 
-pub use clip::{clip_convex, is_convex_ccw, pallets, polygon_area, Clipped};
+pub use clip::{clip_convex, is_convex_ccw, pallets, polygon_area, Clipped, PalletSplit};
 pub use linearize::{integrate_pair_linearized, LinearizedWeights};
 pub use pair::{
     integrate_pair, FaceGeom, IntegrationOptions, PairWeights, RejectStats, OPPOSED_NORMALS_COSINE,

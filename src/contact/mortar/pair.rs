@@ -31,7 +31,8 @@
 //!    records where each overlap vertex comes from) with the tolerances relative to the size of `s` (the largest
 //!    distance between its projected vertices): no overlap ([`RejectStats::no_overlap`], also for
 //!    disjoint bounding boxes) or a sliver ([`RejectStats::sliver`]) are counted and skipped.
-//! 4. **Quadrature.** The overlap is split into centroid pallets ([`pallets`]); on each, the
+//! 4. **Quadrature.** The overlap is split into pallets ([`pallets`]: from its centroid, or a
+//!    fan from its first vertex, [`PalletSplit`]); on each, the
 //!    unit-triangle rule `FaceType::Tri3.quadrature(degree)` mapped affinely. Each point `P` is
 //!    mapped back onto both projected sub-segments: local coordinates on a triangle in closed form
 //!    (barycentric), on a quadrilateral by Newton on the bilinear map `p0 + a s + b t + c s t`
@@ -89,7 +90,9 @@
 
 use std::collections::BTreeMap;
 
-use super::clip::{clip_convex_traced, is_convex_ccw, pallets, Clipped, Point, VertexOrigin};
+use super::clip::{
+    clip_convex_traced, is_convex_ccw, pallets, Clipped, PalletSplit, Point, VertexOrigin,
+};
 use super::segments::{
     sub_segments, traction_node_count, traction_shape_on, SubSegment, TractionScheme,
 };
@@ -128,6 +131,8 @@ pub struct IntegrationOptions {
     pub scheme: TractionScheme,
     /// Degree of the triangle rule on each pallet.
     pub degree: usize,
+    /// How the overlap is split into pallets.
+    pub pallets: PalletSplit,
 }
 
 impl IntegrationOptions {
@@ -145,6 +150,7 @@ impl IntegrationOptions {
         IntegrationOptions {
             scheme,
             degree: Self::default_degree(secondary).max(Self::default_degree(primary)),
+            pallets: PalletSplit::default(),
         }
     }
 }
@@ -174,6 +180,9 @@ pub struct RejectStats {
     /// Non-finite node coordinates (per face pair) or intermediate values (per sub-segment pair).
     pub non_finite: usize,
     pub pairs_integrated: usize,
+    /// Quadrature points of the integrated pairs (their cost: with the degree and the pallet
+    /// split).
+    pub quadrature_points: usize,
 }
 
 impl RejectStats {
@@ -186,6 +195,7 @@ impl RejectStats {
         self.inverse_map_failed += other.inverse_map_failed;
         self.non_finite += other.non_finite;
         self.pairs_integrated += other.pairs_integrated;
+        self.quadrature_points += other.quadrature_points;
     }
 
     /// The counts by name (the field names), for summaries.
@@ -198,6 +208,7 @@ impl RejectStats {
             ("inverse_map_failed", self.inverse_map_failed),
             ("non_finite", self.non_finite),
             ("pairs_integrated", self.pairs_integrated),
+            ("quadrature_points", self.quadrature_points),
         ]
         .into_iter()
         .map(|(k, v)| (k.to_string(), v))
@@ -209,7 +220,10 @@ impl RejectStats {
     /// Counts what became of one sub-segment pair.
     pub(super) fn record(&mut self, outcome: &SubPairOutcome) {
         match outcome {
-            SubPairOutcome::Integrated => self.pairs_integrated += 1,
+            SubPairOutcome::Integrated { points } => {
+                self.pairs_integrated += 1;
+                self.quadrature_points += points;
+            }
             SubPairOutcome::NormalsNotOpposed => self.normals_not_opposed += 1,
             SubPairOutcome::NonConvex => self.non_convex += 1,
             SubPairOutcome::NoOverlap => self.no_overlap += 1,
@@ -524,6 +538,8 @@ struct Accumulator {
     n1: Vec<f64>,
     n2: Vec<f64>,
     area: f64,
+    /// Quadrature points added.
+    points: usize,
     sec_nodes: usize,
     pri_nodes: usize,
 }
@@ -534,6 +550,7 @@ impl Accumulator {
             n1: vec![0.0; traction_nodes * sec_nodes],
             n2: vec![0.0; traction_nodes * pri_nodes],
             area: 0.0,
+            points: 0,
             sec_nodes,
             pri_nodes,
         }
@@ -542,6 +559,7 @@ impl Accumulator {
     /// Adds one quadrature point's contributions.
     fn add_point(&mut self, weight: f64, phi: &[f64], n1: &[f64], n2: &[f64]) {
         self.area += weight;
+        self.points += 1;
         for (k, &pk) in phi.iter().enumerate() {
             let wp = weight * pk;
             let row1 = &mut self.n1[k * self.sec_nodes..(k + 1) * self.sec_nodes];
@@ -557,6 +575,7 @@ impl Accumulator {
 
     fn merge(&mut self, other: &Accumulator) {
         self.area += other.area;
+        self.points += other.points;
         for (a, b) in self.n1.iter_mut().zip(&other.n1) {
             *a += b;
         }
@@ -567,6 +586,7 @@ impl Accumulator {
 
     fn clear(&mut self) {
         self.area = 0.0;
+        self.points = 0;
         self.n1.iter_mut().for_each(|v| *v = 0.0);
         self.n2.iter_mut().for_each(|v| *v = 0.0);
     }
@@ -594,6 +614,7 @@ struct PairContext<'a> {
     pri: &'a FaceGeom<'a>,
     scheme: TractionScheme,
     rule: crate::fe::Rule2,
+    pallets: PalletSplit,
 }
 
 /// Scratch buffers for shape function values.
@@ -606,18 +627,17 @@ struct Scratch {
 }
 
 impl PairContext<'_> {
-    /// Integrates the clipped polygon `overlap` of the projected sub-segments `s` and `m` into
-    /// `acc` (which the caller merges only on success).
+    /// Integrates the clipped polygon of `overlap` (of its projected sub-segments `s` and `m`)
+    /// into `acc` (which the caller merges only on success).
     fn integrate_overlap(
         &self,
-        overlap: &[Point],
-        s: &Projected,
-        m: &Projected,
+        overlap: &Overlap,
         acc: &mut Accumulator,
         scratch: &mut Scratch,
     ) -> Result<(), PairFailure> {
+        let (s, m) = (&overlap.s, &overlap.m);
         let sec_jacobian = s.seg.parent_jacobian();
-        for [c, a, b] in pallets(overlap) {
+        for [c, a, b] in pallets(&overlap.polygon, &overlap.origins, self.pallets) {
             let (u, v) = ([a[0] - c[0], a[1] - c[1]], [b[0] - c[0], b[1] - c[1]]);
             let twice_area = u[0] * v[1] - u[1] * v[0];
             if twice_area <= 0.0 {
@@ -712,6 +732,7 @@ pub fn integrate_pair(
         pri,
         scheme: opts.scheme,
         rule: FaceType::Tri3.quadrature(opts.degree),
+        pallets: opts.pallets,
     };
     let mut scratch = Scratch::default();
     let mut pair_acc = Accumulator::new(traction_count, sec.kind.num_nodes(), pri.kind.num_nodes());
@@ -726,20 +747,16 @@ pub fn integrate_pair(
             pair_acc.clear();
             let outcome = match overlap_of_sub_pair(sec, pri, &plane, s_seg, primary) {
                 Ok(overlap) => {
-                    match context.integrate_overlap(
-                        &overlap.polygon,
-                        &overlap.s,
-                        &overlap.m,
-                        &mut pair_acc,
-                        &mut scratch,
-                    ) {
-                        Ok(()) => SubPairOutcome::Integrated,
+                    match context.integrate_overlap(&overlap, &mut pair_acc, &mut scratch) {
+                        Ok(()) => SubPairOutcome::Integrated {
+                            points: pair_acc.points,
+                        },
                         Err(failure) => SubPairOutcome::Failed(failure),
                     }
                 }
                 Err(outcome) => outcome,
             };
-            if let SubPairOutcome::Integrated = outcome {
+            if let SubPairOutcome::Integrated { .. } = outcome {
                 total.merge(&pair_acc);
             }
             stats.record(&outcome);
@@ -750,7 +767,10 @@ pub fn integrate_pair(
 
 /// What became of one sub-segment pair.
 pub(super) enum SubPairOutcome {
-    Integrated,
+    /// Integrated with this many quadrature points.
+    Integrated {
+        points: usize,
+    },
     NormalsNotOpposed,
     NonConvex,
     NoOverlap,
@@ -835,12 +855,7 @@ pub(super) fn overlap_of_sub_pair<'s>(
 mod tests {
     use super::*;
     use crate::contact::mortar::segments::traction_nodes;
-
-    const SCHEMES: [TractionScheme; 3] = [
-        TractionScheme::FaceShape,
-        TractionScheme::Corners,
-        TractionScheme::PiecewiseLinear,
-    ];
+    use crate::contact::mortar::test_support::{settings, SCHEMES};
 
     /// A surface mesh: node positions and faces as lists of global node ids in face order.
     struct Mesh {
@@ -939,7 +954,19 @@ mod tests {
     }
 
     fn integrate_meshes(sec: &Mesh, pri: &Mesh, scheme: TractionScheme) -> Totals {
-        let opts = IntegrationOptions::for_faces(scheme, sec.kind, pri.kind);
+        integrate_meshes_split(sec, pri, scheme, PalletSplit::default())
+    }
+
+    fn integrate_meshes_split(
+        sec: &Mesh,
+        pri: &Mesh,
+        scheme: TractionScheme,
+        pallets: PalletSplit,
+    ) -> Totals {
+        let opts = IntegrationOptions {
+            pallets,
+            ..IntegrationOptions::for_faces(scheme, sec.kind, pri.kind)
+        };
         let n = sec.nodes.len();
         let mut t = Totals {
             a1: vec![0.0; n],
@@ -994,13 +1021,6 @@ mod tests {
             .fold(0.0, f64::max)
     }
 
-    fn allowed_schemes(kind: FaceType) -> Vec<TractionScheme> {
-        SCHEMES
-            .into_iter()
-            .filter(|&s| traction_nodes(kind, s).is_ok())
-            .collect()
-    }
-
     /// A tilted, sheared flat interface: `x = o + u a + v b`, area `|a x b|`.
     const ORIGIN: Vec3 = [0.3, -0.2, 0.5];
     const EDGE_A: Vec3 = [1.0, 0.2, 0.3];
@@ -1014,7 +1034,8 @@ mod tests {
     /// Flat interface, every pair of face types, every allowed scheme, coincident (3x3 on 3x3)
     /// and non-matching (3x3 against 4x5, with a gap) meshes: the total of n1 is the interface
     /// area (1e-12), momentum `sum_B n1_AB = sum_C n2_AC` for every traction node (1e-12), and the
-    /// patch-test identity `sum_B n1_AB f(x_B) = sum_C n2_AC f(x_C)` for a linear `f` (1e-12).
+    /// patch-test identity `sum_B n1_AB f(x_B) = sum_C n2_AC f(x_C)` for a linear `f` (1e-12);
+    /// with either pallet split.
     #[test]
     fn flat_interfaces_of_all_face_types() {
         let area = dot(cross(EDGE_A, EDGE_B), cross(EDGE_A, EDGE_B)).sqrt();
@@ -1025,9 +1046,11 @@ mod tests {
                 for (nu, nv, gap) in [(3, 3, 0.0), (4, 5, 0.01)] {
                     let sec = grid(sec_kind, 3, 3, false, &flat_map(0.0));
                     let pri = grid(pri_kind, nu, nv, true, &flat_map(gap));
-                    for scheme in allowed_schemes(sec_kind) {
-                        let what = format!("{sec_kind:?} on {pri_kind:?} {nu}x{nv} {scheme:?}");
-                        let t = integrate_meshes(&sec, &pri, scheme);
+                    for (scheme, split) in settings(sec_kind) {
+                        let what = format!(
+                            "{sec_kind:?} on {pri_kind:?} {nu}x{nv} {scheme:?} {split:?} pallets"
+                        );
+                        let t = integrate_meshes_split(&sec, &pri, scheme, split);
                         assert!((t.n1_total - area).abs() < 1e-12, "{what}: {}", t.n1_total);
                         assert!((t.area - area).abs() < 1e-12, "{what}: {}", t.area);
                         let momentum = max_difference(&t.a1, &t.a2);
@@ -1108,9 +1131,9 @@ mod tests {
                 (iso_area - RADIUS).abs() < geometry_tol,
                 "{sec_kind:?}: {iso_area}"
             );
-            for scheme in allowed_schemes(sec_kind) {
-                let what = format!("{sec_kind:?} on {pri_kind:?} {scheme:?}");
-                let t = integrate_meshes(&sec, &pri, scheme);
+            for (scheme, split) in settings(sec_kind) {
+                let what = format!("{sec_kind:?} on {pri_kind:?} {scheme:?} {split:?} pallets");
+                let t = integrate_meshes_split(&sec, &pri, scheme, split);
                 let momentum = max_difference(&t.a1, &t.a2);
                 assert!(momentum < 1e-12, "{what}: momentum {momentum}");
                 // Each dropped sliver loses less than 1e-8 scale^2 (scale < 1 here).
@@ -1313,7 +1336,7 @@ mod tests {
         total.add(&s);
         total.add(&s);
         assert_eq!(total.to_map()["non_finite"], 2);
-        assert_eq!(total.to_map().len(), 7);
+        assert_eq!(total.to_map().len(), 8);
     }
 
     /// Quadratic faces touching along an edge, or offset by 1e-9 along the normal or in the

@@ -326,12 +326,7 @@ pub fn traction_shape_on_at<T: Scalar>(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    const SCHEMES: [TractionScheme; 3] = [
-        TractionScheme::FaceShape,
-        TractionScheme::Corners,
-        TractionScheme::PiecewiseLinear,
-    ];
+    use crate::contact::mortar::test_support::SCHEMES;
 
     fn shoelace(p: &[[f64; 2]]) -> f64 {
         0.5 * (0..p.len())

@@ -28,11 +28,11 @@ pub(super) fn integrate_overlap(
     tangent.unresolved += unresolved;
     let (s_dual, m_dual) = (DualMap::new(&s_map), DualMap::new(&m_map));
     let sec_jacobian = overlap.s.seg.parent_jacobian();
-    let centroid = area_centroid_at(&polygon);
-    for i in 0..polygon.len() {
-        let (a, b) = (polygon[i], polygon[(i + 1) % polygon.len()]);
-        let u = [a[0] - centroid[0], a[1] - centroid[1]];
-        let v = [b[0] - centroid[0], b[1] - centroid[1]];
+    let apex = kernel.pallets.apex(&polygon, &overlap.origins);
+    for (i, j) in kernel.pallets.edges(polygon.len(), &overlap.origins) {
+        let (a, b) = (polygon[i], polygon[j]);
+        let u = [a[0] - apex[0], a[1] - apex[1]];
+        let v = [b[0] - apex[0], b[1] - apex[1]];
         let twice_area = det2(u, v);
         if twice_area.re <= 0.0 {
             continue;
@@ -45,8 +45,8 @@ pub(super) fn integrate_overlap(
             .enumerate()
         {
             let p = [
-                centroid[0] + u[0] * q[0] + v[0] * q[1],
-                centroid[1] + u[1] * q[0] + v[1] * q[1],
+                apex[0] + u[0] * q[0] + v[0] * q[1],
+                apex[1] + u[1] * q[0] + v[1] * q[1],
             ];
             let p_float = [p[0].re, p[1].re];
             let on_s = overlap.s.invert(p_float).ok_or(PairFailure::InverseMap)?;
