@@ -5,7 +5,8 @@
 //! the thickness of each block, one pass, mu = 0.3, penalty 100 E/h) with one thing pushed to
 //! an extreme: the penalty factor from 1 to 1e8, mu up to 1, a near-incompressible material
 //! (nu = 0.49), the upper block pushed until its nodes slide off the lower surface, meshes
-//! offset by 1e-9 (sliver overlaps), an initial penetration of half an element.
+//! offset by 1e-9 (sliver overlaps), an initial penetration of half an element; the slide off
+//! the edge and the slivers also with the overlaps split into fans of pallets.
 //!
 //! Each run must end converged or with one diagnosed error line after step cutting: never a
 //! panic, never a NaN or an infinity in a result file (CSV, JSON, VTU). The cases marked
@@ -27,6 +28,16 @@ fn extremes(full: bool) -> Vec<Extreme> {
         base.replace(from, to)
     };
     let penalty = |p: &str| with("friction = 0.3", &format!("friction = 0.3\npenalty = {p}"));
+    // The overlaps split into fans of pallets from a vertex (`pallets = "fan"`).
+    let fan = |text: &str| {
+        let edited = text.replacen(
+            "kind = \"contact\"",
+            "kind = \"contact\"\npallets = \"fan\"",
+            1,
+        );
+        assert_ne!(edited, text, "no contact interface to split into fans");
+        edited
+    };
     let blocks = "lo = [0.25, 0.1, 0.5]\nhi = [0.95, 0.9, 1.0]";
     let mut cases: Vec<Extreme> = vec![
         (
@@ -58,6 +69,19 @@ fn extremes(full: bool) -> Vec<Extreme> {
         (
             "penetration of half an element",
             with(blocks, "lo = [0.25, 0.1, 0.25]\nhi = [0.95, 0.9, 0.75]"),
+            true,
+        ),
+        (
+            "slide off the edge, fan pallets",
+            fan(&with("value = [0.2]", "value = [1.0]").replace("count = 5", "count = 12")),
+            true,
+        ),
+        (
+            "offset 1e-9 (slivers), fan pallets",
+            fan(&with(
+                blocks,
+                "lo = [0.250000001, 0.100000001, 0.5]\nhi = [0.950000001, 0.900000001, 1.0]",
+            )),
             true,
         ),
     ];

@@ -338,11 +338,16 @@ pub struct InterfaceSpec {
     /// How the overlap of two faces is split into integration pallets: `"centroid"` (default,
     /// ALGORITHM.md 3.5): one triangle per edge of the overlap polygon from its area centroid,
     /// a split that moves continuously with the faces. `"fan"`: two triangles fewer, a fan from
-    /// the polygon's first vertex; the same integral where the rule is exact (affine face pairs,
-    /// the patch tests) at about half the points on rectangular overlaps (measured on the
-    /// sliding blocks: mortar integration 30 % cheaper, the force curve 1.8e-11 from degree 10's),
-    /// but the split can jump where the overlap gains or loses a vertex, and with it the
-    /// quadrature error on curved faces (`contact::mortar::clip`, "Pallets").
+    /// one vertex of the polygon (chosen by where the vertices come from, not by round-off);
+    /// the same integral where the rule is exact (affine face pairs, the patch tests) at about
+    /// half the points on rectangular overlaps. The split can jump where the overlap gains or
+    /// loses a vertex, and with it the quadrature error on curved faces
+    /// (`contact::mortar::clip`, "Pallets"). Measured against the centroid split: the sliding
+    /// blocks (which use it) 30 % less mortar integration, the force curve 1.8e-11 from degree
+    /// 10's (1.3e-13); the Hertz scene the same contact radius and peak pressure errors to
+    /// 1e-14, displacements within 1.6e-13, 42 Newton iterations either way, 9.7 s against
+    /// 11.9 s; the bending scene displacements within 7e-15, 87 iterations either way, 1.5 s
+    /// against 1.8 s.
     pub pallets: Option<String>,
     /// Contact: Coulomb friction coefficient mu >= 0. Default 0: frictionless, and then no
     /// friction work is done at all (no slip, no return map).
