@@ -446,7 +446,8 @@ pub enum PalletSplit {
     /// `N` triangles `(centroid, p_i, p_i+1)` from the area centroid.
     #[default]
     Centroid,
-    /// `N - 2` triangles `(p_0, p_i, p_i+1)` from the first vertex.
+    /// `N - 2` triangles `(p_a, p_i, p_i+1)` from one vertex `p_a`, chosen by the vertices'
+    /// origins ([`PalletSplit::apex`]).
     Fan,
 }
 
@@ -610,7 +611,7 @@ mod tests {
             .collect()
     }
 
-    fn rotated_order(p: &[Point], k: usize) -> Vec<Point> {
+    fn rotated_order<T: Clone>(p: &[T], k: usize) -> Vec<T> {
         let mut q = p.to_vec();
         q.rotate_left(k % p.len());
         q
@@ -927,6 +928,11 @@ mod tests {
         let fan = pallets(&pent, &origins, PalletSplit::Fan);
         let expected = [[3, 4, 0], [3, 0, 1], [3, 1, 2]].map(|t| t.map(|i| pent[i]));
         assert_eq!(fan, expected);
+        // The same pallets whichever vertex the clipping happens to return first.
+        for k in 1..pent.len() {
+            let (p, o) = (rotated_order(&pent, k), rotated_order(&origins, k));
+            assert_eq!(pallets(&p, &o, PalletSplit::Fan), expected, "rotated by {k}");
+        }
     }
 
     /// The point a provenance stands for: the input vertex, or the crossing of the two lines.
