@@ -931,7 +931,11 @@ mod tests {
         // The same pallets whichever vertex the clipping happens to return first.
         for k in 1..pent.len() {
             let (p, o) = (rotated_order(&pent, k), rotated_order(&origins, k));
-            assert_eq!(pallets(&p, &o, PalletSplit::Fan), expected, "rotated by {k}");
+            assert_eq!(
+                pallets(&p, &o, PalletSplit::Fan),
+                expected,
+                "rotated by {k}"
+            );
         }
     }
 
