@@ -5,7 +5,8 @@
 //!   homogeneous finite deformation with Cauchy stress `sigma_zz = -p0` and every contact
 //!   pressure `p_A = p0`; checked for Hex8, Hex20, Hex27 and Tet10, either side secondary,
 //!   schemes 2 and 3 (and 1 on Hex27), to 1e-10, with the contact forces summing to zero,
-//!   and with the overlaps split into fans of pallets (`pallets = "fan"`) as well;
+//!   and with the overlaps split into fans of pallets (`pallets = "fan"`: Hex8 and Hex27,
+//!   scheme 2, either side secondary);
 //! - the assembled Jacobian of a frictional sliding scene against PETSc's finite-difference
 //!   Jacobian (`-snes_test_jacobian`) at every Newton iterate;
 //! - the same results on 1 and 2 ranks.

@@ -338,7 +338,7 @@ pub struct InterfaceSpec {
     /// How the overlap of two faces is split into integration pallets: `"centroid"` (default,
     /// ALGORITHM.md 3.5): one triangle per edge of the overlap polygon from its area centroid,
     /// a split that moves continuously with the faces. `"fan"`: two triangles fewer, a fan from
-    /// one vertex of the polygon (chosen by where the vertices come from, not by round-off);
+    /// one vertex of the polygon (chosen by where the vertices come from, not by position);
     /// the same integral where the rule is exact (affine face pairs, the patch tests) at about
     /// half the points on rectangular overlaps. The split can jump where the overlap gains or
     /// loses a vertex, and with it the quadrature error on curved faces

@@ -54,7 +54,9 @@
 //!   provenance ([`VertexOrigin`], in its order: the lowest-numbered vertex of the first
 //!   polygon inside the overlap, else of the second, else the first crossing), not by position
 //!   nor by the order in which the clipping returns the vertices (which depends on a round-off
-//!   comparison of the two polygons' sizes). The two splits tile the same polygon, so a rule
+//!   comparison of the two polygons' sizes). Only where vertices of the two polygons nearly
+//!   coincide (within the clipping's length tolerance) can round-off decide which of them
+//!   survives, and so the apex. The two splits tile the same polygon, so a rule
 //!   exact for the integrand gives the same integral on both (the mortar integrand is a
 //!   polynomial on affine pairs, where both are exact: the patch tests); a rectangle takes 2
 //!   pallets instead of 4, a hexagon 4 instead of 6. The price: the apex follows the overlap's

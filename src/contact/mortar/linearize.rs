@@ -199,7 +199,9 @@ impl LinearizedWeights {
 }
 
 /// As [`super::integrate_pair`], with derivatives (see [`LinearizedWeights`] and the module
-/// docs). Rejections are counted in `stats` exactly as `integrate_pair` counts them.
+/// docs). Rejections, integrated pairs and their quadrature points are counted in `stats` as
+/// `integrate_pair` counts them, except that a sub-segment pair whose derivatives are not finite
+/// while its values are counts as non-finite here (module docs, "Degenerate configurations").
 ///
 /// # Panics
 /// If a face's `x.len()` differs from its type's number of nodes.

@@ -32,7 +32,7 @@
 //!    distance between its projected vertices): no overlap ([`RejectStats::no_overlap`], also for
 //!    disjoint bounding boxes) or a sliver ([`RejectStats::sliver`]) are counted and skipped.
 //! 4. **Quadrature.** The overlap is split into pallets ([`pallets`]: from its centroid, or a
-//!    fan from its first vertex, [`PalletSplit`]); on each, the
+//!    fan from one vertex chosen by where the vertices come from, [`PalletSplit`]); on each, the
 //!    unit-triangle rule `FaceType::Tri3.quadrature(degree)` mapped affinely. Each point `P` is
 //!    mapped back onto both projected sub-segments: local coordinates on a triangle in closed form
 //!    (barycentric), on a quadrilateral by Newton on the bilinear map `p0 + a s + b t + c s t`
