@@ -332,7 +332,9 @@ fn node_on_segment_jacobian_and_ranks() {
 }
 
 /// 1 and 2 ranks give the same frictional slide (displacements to 1e-8 relative), also with
-/// the sides swapped (partly covered secondary nodes, some fading out; measured 1e-14). The
+/// the sides swapped (partly covered secondary nodes, some fading out; measured 1e-14), and the
+/// same segment-pair and quadrature-point counts (checked to fail when every rank counts the
+/// faces it integrates: 20 pairs on 2 ranks against 12). The
 /// swapped slide used to end 3e-5 apart on one machine (a step cut on one rank count only):
 /// round-off picked the first tangent of nodes whose trial starts a step on the Coulomb cone,
 /// until `contact::law::CONE_TIE` settled the tie.
@@ -348,6 +350,13 @@ fn contact_one_and_two_ranks_agree() {
         let d =
             common::max_rel_difference(&common::displacements(&one), &common::displacements(&two));
         assert!(d < 1e-8, "{name}: 1 vs 2 ranks: {d:e}");
+        // The segment-pair counts of the last evaluation, summed over ranks, are the same: a
+        // face next to a strip cut is integrated by both neighbours but counted by one.
+        for kind in ["pairs_integrated", "no_overlap", "quadrature_points"] {
+            let key = format!("pairs_slide_{kind}");
+            let (a, b) = (common::metric(&one, &key), common::metric(&two, &key));
+            assert!(a > 0.0 && a == b, "{name}: {key} {a} on 1 rank, {b} on 2");
+        }
     }
 }
 
