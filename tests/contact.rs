@@ -133,7 +133,7 @@ fn contact_patch_test_with_fan_pallets() {
         for secondary in ["low", "up"] {
             let name = format!("contact_patch_fan_{element}_{secondary}");
             let centroid = patch_case(element, lo, up, secondary, 2);
-            let case = common::write_case(&name, &with_fan_pallets(&centroid));
+            let case = common::write_case(&name, &common::with_fan_pallets(&centroid));
             let (out, _) = common::run_case(&case, 1, &["-q"]);
             let stress = common::metric(&out, "max_rel_stress_error");
             let pressure = common::metric(&out, "max_rel_pressure_error");
@@ -149,17 +149,6 @@ fn contact_patch_test_with_fan_pallets() {
             );
         }
     }
-}
-
-/// A case text whose (single) contact interface splits its overlaps into fans of pallets.
-fn with_fan_pallets(text: &str) -> String {
-    let fan = text.replacen(
-        "kind = \"contact\"\n",
-        "kind = \"contact\"\npallets = \"fan\"\n",
-        1,
-    );
-    assert!(fan.contains("pallets = \"fan\""));
-    fan
 }
 
 /// The patch test's shipped scene passes as shipped.
@@ -251,7 +240,7 @@ fn contact_jacobian_matches_finite_differences() {
         ("contact_jacobian_fd_partly_covered", swapped_slide()),
         (
             "contact_jacobian_fd_fan",
-            with_fan_pallets(&common::slide_case(5)),
+            common::with_fan_pallets(&common::slide_case(5)),
         ),
     ] {
         let case = common::write_case(name, &text);

@@ -28,16 +28,6 @@ fn extremes(full: bool) -> Vec<Extreme> {
         base.replace(from, to)
     };
     let penalty = |p: &str| with("friction = 0.3", &format!("friction = 0.3\npenalty = {p}"));
-    // The overlaps split into fans of pallets from a vertex (`pallets = "fan"`).
-    let fan = |text: &str| {
-        let edited = text.replacen(
-            "kind = \"contact\"",
-            "kind = \"contact\"\npallets = \"fan\"",
-            1,
-        );
-        assert_ne!(edited, text, "no contact interface to split into fans");
-        edited
-    };
     let blocks = "lo = [0.25, 0.1, 0.5]\nhi = [0.95, 0.9, 1.0]";
     let mut cases: Vec<Extreme> = vec![
         (
@@ -73,12 +63,14 @@ fn extremes(full: bool) -> Vec<Extreme> {
         ),
         (
             "slide off the edge, fan pallets",
-            fan(&with("value = [0.2]", "value = [1.0]").replace("count = 5", "count = 12")),
+            common::with_fan_pallets(
+                &with("value = [0.2]", "value = [1.0]").replace("count = 5", "count = 12"),
+            ),
             true,
         ),
         (
             "offset 1e-9 (slivers), fan pallets",
-            fan(&with(
+            common::with_fan_pallets(&with(
                 blocks,
                 "lo = [0.250000001, 0.100000001, 0.5]\nhi = [0.950000001, 0.900000001, 1.0]",
             )),

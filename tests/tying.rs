@@ -130,8 +130,7 @@ fn scheme_one_on_quad9_passes_and_on_quad8_is_refused() {
 fn tied_sphere_with_fan_pallets() {
     let case_dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/thick_sphere_tied");
     let text = std::fs::read_to_string(case_dir.join("case.toml")).unwrap();
-    let fan_text = text.replacen("passes = 1\n", "passes = 1\npallets = \"fan\"\n", 1);
-    assert!(fan_text.contains("pallets = \"fan\""));
+    let fan_text = common::with_fan_pallets(&text);
     let mut runs = Vec::new();
     for (name, text) in [
         ("tied_sphere_centroid", &text),

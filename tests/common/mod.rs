@@ -6,6 +6,14 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+/// A case text whose first interface splits its overlaps into fans of pallets
+/// (`pallets = "fan"`).
+pub fn with_fan_pallets(text: &str) -> String {
+    let fan = text.replacen("[[interface]]\n", "[[interface]]\npallets = \"fan\"\n", 1);
+    assert_ne!(fan, text, "no interface to split into fans");
+    fan
+}
+
 /// A fresh, empty folder under cargo's temporary test directory.
 pub fn fresh_dir(name: &str) -> PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);

@@ -31,9 +31,9 @@
 //!    records where each overlap vertex comes from) with the tolerances relative to the size of `s` (the largest
 //!    distance between its projected vertices): no overlap ([`RejectStats::no_overlap`], also for
 //!    disjoint bounding boxes) or a sliver ([`RejectStats::sliver`]) are counted and skipped.
-//! 4. **Quadrature.** The overlap is split into pallets ([`pallets`]: from its centroid, or a
-//!    fan from one vertex chosen by where the vertices come from, [`PalletSplit`]); on each, the
-//!    unit-triangle rule `FaceType::Tri3.quadrature(degree)` mapped affinely. Each point `P` is
+//! 4. **Quadrature.** The overlap is split into pallets ([`pallets`](super::clip::pallets):
+//!    from its centroid, or a fan from one vertex chosen by where the vertices come from,
+//!    [`PalletSplit`]); on each, the unit-triangle rule `FaceType::Tri3.quadrature(degree)` mapped affinely. Each point `P` is
 //!    mapped back onto both projected sub-segments: local coordinates on a triangle in closed form
 //!    (barycentric), on a quadrilateral by Newton on the bilinear map `p0 + a s + b t + c s t`
 //!    (start at the centre, step limited to the parent square, converged when the step is below
@@ -90,9 +90,7 @@
 
 use std::collections::BTreeMap;
 
-use super::clip::{
-    clip_convex_traced, is_convex_ccw, pallets, Clipped, PalletSplit, Point, VertexOrigin,
-};
+use super::clip::{clip_convex_traced, is_convex_ccw, Clipped, PalletSplit, Point, VertexOrigin};
 use super::segments::{
     sub_segments, traction_node_count, traction_shape_on, SubSegment, TractionScheme,
 };
@@ -637,7 +635,10 @@ impl PairContext<'_> {
     ) -> Result<(), PairFailure> {
         let (s, m) = (&overlap.s, &overlap.m);
         let sec_jacobian = s.seg.parent_jacobian();
-        for [c, a, b] in pallets(&overlap.polygon, &overlap.origins, self.pallets) {
+        let (polygon, origins) = (&overlap.polygon, &overlap.origins);
+        let c = self.pallets.apex(polygon, origins);
+        for (i, j) in self.pallets.edges(polygon.len(), origins) {
+            let (a, b) = (polygon[i], polygon[j]);
             let (u, v) = ([a[0] - c[0], a[1] - c[1]], [b[0] - c[0], b[1] - c[1]]);
             let twice_area = u[0] * v[1] - u[1] * v[0];
             if twice_area <= 0.0 {
