@@ -141,8 +141,9 @@
 //! - `pareto.png`, `pareto.svg`: the error against wall time on log-log axes, every converged
 //!   run a point, its **Pareto front** ringed: the runs that no other run beats in both (no
 //!   more time and no larger error, one of them strictly; errors at or below the study's
-//!   `error_floor` count as equal, and so do wall times within its `time_noise` of each
-//!   other; [`pareto_front`]); variants with `reference_only = true`
+//!   `error_floor` count as equal, and so do errors within its `error_noise` of each other
+//!   (relative, round-off) and wall times within its `time_noise`; [`pareto_front`]);
+//!   variants with `reference_only = true`
 //!   are plotted but not candidates. Without `[curves]` the error is the metric (with
 //!   `finest_reference`, its relative difference to the finest run's); with `[curves]` (no
 //!   exact solution: the reference variant is the truth) it is a variant's
@@ -207,6 +208,13 @@ pub struct StudyFile {
     /// Default 0.
     #[serde(default)]
     pub error_floor: f64,
+    /// Errors within this fraction of each other (of the larger) count as equal on the Pareto
+    /// front: round-off. Two runs that compute the same integrals in a different order (a
+    /// different split of the overlaps into pallets, say) agree to 12 or more digits, and the
+    /// slower of them would otherwise stay on the front by an error smaller in the last digits.
+    /// Finite, in [0, 1). Default 1e-9.
+    #[serde(default = "default_error_noise")]
+    pub error_noise: f64,
     /// Wall times within this fraction of each other count as equal on the Pareto front: the
     /// machine's noise (two runs that do the same work differ by a few per cent, and the
     /// faster of them would otherwise push the other off the front). Finite, in [0, 1).
@@ -225,6 +233,12 @@ pub struct StudyFile {
     /// on the plots or the front). One metric, not a list. Not with `[curves]`, whose
     /// `reference` plays this part. Default: none (the metric is an error).
     pub finest_reference: Option<String>,
+}
+
+/// `error_noise` when the study file does not set it: errors that agree to nine digits are the
+/// same error for every metric a study measures.
+fn default_error_noise() -> f64 {
+    1e-9
 }
 
 /// The study's `metric`: one name, or several whose largest absolute value is the error.
@@ -363,6 +377,8 @@ pub struct Study {
     pub curves: Option<Curves>,
     /// Errors at or below this count as equal on the Pareto front (`error_floor`).
     pub error_floor: f64,
+    /// Relative error differences at or below this count as equal (`error_noise`).
+    pub error_noise: f64,
     /// Relative wall-time differences at or below this count as equal (`time_noise`).
     pub time_noise: f64,
     /// Checks on the study's metrics (`expect`).
@@ -453,6 +469,12 @@ impl Study {
             return Err(err(format!(
                 "error_floor = {}: must be finite and >= 0",
                 file.error_floor
+            )));
+        }
+        if !(file.error_noise.is_finite() && (0.0..1.0).contains(&file.error_noise)) {
+            return Err(err(format!(
+                "error_noise = {}: must be finite, >= 0 and < 1",
+                file.error_noise
             )));
         }
         if !(file.time_noise.is_finite() && (0.0..1.0).contains(&file.time_noise)) {
@@ -617,6 +639,7 @@ impl Study {
             petsc_options: None,
             curves: None,
             error_floor: file.error_floor,
+            error_noise: file.error_noise,
             time_noise: file.time_noise,
             expectations: crate::expect::parse_all("expect", &file.expect).map_err(err)?,
             finest_reference: file.finest_reference,
@@ -1013,9 +1036,9 @@ impl Study {
         }
     }
 
-    /// The runs on the Pareto front ([`pareto_front`] with the study's `error_floor` and
-    /// `time_noise`), among
-    /// the runs of the variants that are choices (not `reference_only`).
+    /// The runs on the Pareto front ([`pareto_front`] with the study's `error_floor`,
+    /// `error_noise` and `time_noise`), among the runs of the variants that are choices (not
+    /// `reference_only`).
     fn front(&self, runs: &[RunRecord]) -> Vec<usize> {
         let choices: Vec<RunRecord> = runs
             .iter()
@@ -1030,7 +1053,12 @@ impl Study {
                 }
             })
             .collect();
-        pareto_front(&choices, self.error_floor, self.time_noise)
+        let ties = Ties {
+            error_floor: self.error_floor,
+            error_noise: self.error_noise,
+            time_noise: self.time_noise,
+        };
+        pareto_front(&choices, ties)
     }
 
     /// A converged run's error: its metric, or the largest absolute value of the metrics (NaN
@@ -1578,12 +1606,30 @@ fn study_csv(runs: &[RunRecord]) -> String {
     out
 }
 
+/// When two runs count as equal on the Pareto front (the study keys of the same names).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Ties {
+    /// Errors at or below this are equal.
+    pub error_floor: f64,
+    /// Errors that differ by at most this fraction of the larger are equal.
+    pub error_noise: f64,
+    /// Wall times that differ by at most this fraction of the larger are equal.
+    pub time_noise: f64,
+}
+
 /// The runs on the Pareto front of error against wall time: converged runs with a finite
 /// error that no other such run beats in both (no more time and no larger error, one of them
-/// strictly), errors at or below `error_floor` counting as equal, and times that differ by at
-/// most `time_noise` of the larger counting as equal. Indices into `runs`, ascending.
-pub fn pareto_front(runs: &[RunRecord], error_floor: f64, time_noise: f64) -> Vec<usize> {
-    let same_time = |a: f64, b: f64| (a - b).abs() <= time_noise * a.max(b);
+/// strictly), with the equalities of `ties`. Indices into `runs`, ascending.
+pub fn pareto_front(runs: &[RunRecord], ties: Ties) -> Vec<usize> {
+    let within = |noise: f64, a: f64, b: f64| (a - b).abs() <= noise * a.max(b);
+    // `(strictly less, no more)` of `a` against `b`, with the tie of `noise`.
+    let compare = |noise: f64, a: f64, b: f64| {
+        if within(noise, a, b) {
+            (false, true)
+        } else {
+            (a < b, a < b)
+        }
+    };
     let points: Vec<(usize, f64, f64)> = runs
         .iter()
         .enumerate()
@@ -1591,19 +1637,16 @@ pub fn pareto_front(runs: &[RunRecord], error_floor: f64, time_noise: f64) -> Ve
         .filter_map(|(i, r)| {
             r.error
                 .filter(|e| e.is_finite())
-                .map(|e| (i, r.seconds, e.abs().max(error_floor)))
+                .map(|e| (i, r.seconds, e.abs().max(ties.error_floor)))
         })
         .collect();
     points
         .iter()
         .filter(|&&(i, t, e)| {
             !points.iter().any(|&(j, tj, ej)| {
-                let (faster, no_slower) = if same_time(tj, t) {
-                    (false, true)
-                } else {
-                    (tj < t, tj < t)
-                };
-                j != i && no_slower && ej <= e && (faster || ej < e)
+                let (faster, no_slower) = compare(ties.time_noise, tj, t);
+                let (smaller, no_larger) = compare(ties.error_noise, ej, e);
+                j != i && no_slower && no_larger && (faster || smaller)
             })
         })
         .map(|p| p.0)
@@ -1794,10 +1837,16 @@ mod tests {
             run("failed", 0.1, None, false),
             run("middle", 3.0, Some(-1e-3), true),
         ];
-        assert_eq!(pareto_front(&runs, 0.0, 0.0), vec![0, 1, 5]);
-        assert!(pareto_front(&[], 0.0, 0.0).is_empty());
+        let ties = |error_floor: f64, error_noise: f64, time_noise: f64| Ties {
+            error_floor,
+            error_noise,
+            time_noise,
+        };
+        let exact = Ties::default();
+        assert_eq!(pareto_front(&runs, exact), vec![0, 1, 5]);
+        assert!(pareto_front(&[], exact).is_empty());
         // Below the floor, errors are equal: the slow fine run is beaten by the fast one.
-        assert_eq!(pareto_front(&runs, 1e-2, 0.0), vec![0]);
+        assert_eq!(pareto_front(&runs, ties(1e-2, 0.0, 0.0)), vec![0]);
         // Two runs doing the same work, 4 % apart: the slower is beaten without a noise margin
         // and kept with one; a time tie still loses to a smaller error.
         let twins = vec![
@@ -1805,9 +1854,26 @@ mod tests {
             run("same_work", 14.0, Some(7.5e-6), true),
             run("finer_same_time", 14.3, Some(1e-6), true),
         ];
-        assert_eq!(pareto_front(&twins[..2], 0.0, 0.0), vec![1]);
-        assert_eq!(pareto_front(&twins[..2], 0.0, 0.1), vec![0, 1]);
-        assert_eq!(pareto_front(&twins, 0.0, 0.1), vec![2]);
+        assert_eq!(pareto_front(&twins[..2], exact), vec![1]);
+        assert_eq!(pareto_front(&twins[..2], ties(0.0, 0.0, 0.1)), vec![0, 1]);
+        assert_eq!(pareto_front(&twins, ties(0.0, 0.0, 0.1)), vec![2]);
+        // The same integrals in another order (the Hertz study's two pallet splits at level 1):
+        // the slower run's error is smaller in the 12th digit. It stays on the front when every
+        // digit counts, and is beaten within a relative error noise; a real difference in error
+        // (1e-6 relative) still keeps it.
+        let reordered = vec![
+            run("centroid", 11.65, Some(7.568973499695767e-3), true),
+            run("fan", 9.35, Some(7.568973499702128e-3), true),
+            run("finer", 11.65, Some(7.568966e-3), true),
+        ];
+        assert_eq!(pareto_front(&reordered[..2], exact), vec![0, 1]);
+        assert_eq!(pareto_front(&reordered[..2], ties(0.0, 1e-9, 0.0)), vec![1]);
+        assert_eq!(pareto_front(&reordered, ties(0.0, 1e-9, 0.0)), vec![1, 2]);
+        // Both noises at once: equal times and equal errors beat neither.
+        assert_eq!(
+            pareto_front(&reordered[..2], ties(0.0, 1e-9, 0.3)),
+            vec![0, 1]
+        );
     }
 
     /// Errors against the finest run: relative differences of the metric to the reference

@@ -683,8 +683,8 @@ petsc = "-pc_type jacobi -ksp_rtol 1e-13 -ksp_max_it 5000 -mat_mumps_icntl_8 77"
 }
 
 /// `metric` as a list: a run's error is the largest of the metrics (checked against each run's
-/// own summary); a negative `error_floor` and a `time_noise` of 1 or more are refused with one
-/// line naming the key.
+/// own summary); a negative `error_floor`, an `error_noise` NaN and a `time_noise` of 1 or more
+/// are refused with one line naming the key.
 #[test]
 fn the_error_may_be_the_largest_of_several_metrics() {
     let study = small_study("[[variant]]\nname = \"hex8\"\n").replace(
@@ -708,6 +708,11 @@ fn the_error_may_be_the_largest_of_several_metrics() {
             "study_error_floor",
             "error_floor = -1.0",
             "error_floor = -1: must be",
+        ),
+        (
+            "study_error_noise",
+            "error_noise = nan",
+            "error_noise = NaN: must be",
         ),
         (
             "study_time_noise",

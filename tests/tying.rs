@@ -130,13 +130,10 @@ fn scheme_one_on_quad9_passes_and_on_quad8_is_refused() {
 fn tied_sphere_with_fan_pallets() {
     let case_dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/thick_sphere_tied");
     let text = std::fs::read_to_string(case_dir.join("case.toml")).unwrap();
-    let fan_text = common::with_fan_pallets(&text);
     let mut runs = Vec::new();
-    for (name, text) in [
-        ("tied_sphere_centroid", &text),
-        ("tied_sphere_fan", &fan_text),
-    ] {
-        let case = common::write_case(name, text);
+    for split in ["centroid", "fan"] {
+        let name = format!("tied_sphere_{split}");
+        let case = common::write_case(&name, &common::with_pallets(&text, split));
         std::fs::copy(
             case_dir.join("petscrc"),
             case.parent().unwrap().join("petscrc"),

@@ -342,12 +342,12 @@ pub struct InterfaceSpec {
     /// the same integral where the rule is exact (affine face pairs, the patch tests) at about
     /// half the points on rectangular overlaps. The split can jump where the overlap gains or
     /// loses a vertex, and with it the quadrature error on curved faces
-    /// (`contact::mortar::clip`, "Pallets"). Measured against the centroid split: the sliding
-    /// blocks (which use it) 30 % less mortar integration, the force curve 1.8e-11 from degree
-    /// 10's (1.3e-13); the Hertz scene the same contact radius and peak pressure errors to
-    /// 1e-14, displacements within 1.6e-13, 42 Newton iterations either way, 9.7 s against
-    /// 11.9 s; the bending scene displacements within 7e-15, 87 iterations either way, 1.5 s
-    /// against 1.8 s.
+    /// (`contact::mortar::clip`, "Pallets"). Measured against the centroid split (the scenes'
+    /// studies run both): the sliding blocks 30 % less mortar integration, the force curve
+    /// 1.8e-11 from degree 10's (1.3e-13); the Hertz scene the same errors to 1e-12, 42 Newton
+    /// iterations either way, 8-25 % less time; the bending scene the same tip to 1e-9, 87
+    /// iterations either way, 13 % less time. These three scenes use it; on the tied sphere and
+    /// the contact patch the linear solve dominates and the time does not move.
     pub pallets: Option<String>,
     /// Contact: Coulomb friction coefficient mu >= 0. Default 0: frictionless, and then no
     /// friction work is done at all (no slip, no return map).

@@ -9,9 +9,23 @@ use std::process::{Command, Output};
 /// A case text whose first interface splits its overlaps into fans of pallets
 /// (`pallets = "fan"`).
 pub fn with_fan_pallets(text: &str) -> String {
-    let fan = text.replacen("[[interface]]\n", "[[interface]]\npallets = \"fan\"\n", 1);
-    assert_ne!(fan, text, "no interface to split into fans");
-    fan
+    with_pallets(text, "fan")
+}
+
+/// A case text whose first interface splits its overlaps into pallets as `split` says
+/// (`pallets = "<split>"`), for a case text that does not choose.
+pub fn with_pallets(text: &str, split: &str) -> String {
+    assert!(
+        !text.contains("\npallets ="),
+        "the case already chooses its pallets"
+    );
+    let out = text.replacen(
+        "[[interface]]\n",
+        &format!("[[interface]]\npallets = \"{split}\"\n"),
+        1,
+    );
+    assert_ne!(out, text, "no interface to split into pallets");
+    out
 }
 
 /// A fresh, empty folder under cargo's temporary test directory.
