@@ -78,8 +78,8 @@ fn csv_rows(out: &Path) -> Vec<BTreeMap<String, String>> {
     let header = lines.next().unwrap();
     assert_eq!(
         header,
-        "variant,level,h,ranks,error,seconds,newton_its,converged,augmentations,peak_memory_mb,\
-         on_front"
+        "variant,level,h,ranks,error,seconds,seconds_slowest,newton_its,converged,augmentations,\
+         peak_memory_mb,on_front"
     );
     let names: Vec<&str> = header.split(',').collect();
     lines
@@ -210,6 +210,33 @@ set = { "mesh.0.element" = "hex20" }
         stdout.contains("Pareto front of energy_error against wall time"),
         "{stdout}"
     );
+}
+
+/// `repeat = 3`: every run is made three times; `seconds` is the fastest and `seconds_slowest`
+/// the slowest (times to the nanosecond: never equal for runs of their own), the outputs in
+/// `runs/` are the first run's, and the repeats' scratch folders are gone.
+#[test]
+fn repeated_runs_keep_the_fastest_time() {
+    let study = format!(
+        "repeat = 3\n{}",
+        small_study("[[variant]]\nname = \"hex8\"\nset = { \"mesh.0.element\" = \"hex8\" }\n")
+    );
+    let dir = study_dir("study_repeat_runs", &study);
+    let o = run_study(&dir, &["-q"]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let out = dir.join("out");
+    let rows = csv_rows(&out);
+    assert_eq!(rows.len(), 2, "{rows:?}");
+    for (level, r) in rows.iter().enumerate() {
+        let (fastest, slowest): (f64, f64) = (
+            r["seconds"].parse().unwrap(),
+            r["seconds_slowest"].parse().unwrap(),
+        );
+        assert!(0.0 < fastest && fastest < slowest, "{r:?}");
+        let run = out.join("runs/hex8").join(level.to_string());
+        assert!(run.join("summary.json").is_file(), "{}", run.display());
+        assert!(!run.with_extension("repeat").exists(), "{}", run.display());
+    }
 }
 
 #[test]
@@ -713,6 +740,11 @@ fn the_error_may_be_the_largest_of_several_metrics() {
             "study_error_noise",
             "error_noise = nan",
             "error_noise = NaN: must be",
+        ),
+        (
+            "study_repeat",
+            "repeat = 0",
+            "repeat = 0: must be from 1 to 10",
         ),
         (
             "study_time_noise",
