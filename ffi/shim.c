@@ -1,4 +1,6 @@
-/* Values that PETSc and OpenMPI expose only as macros. No logic lives here. */
+/* Values that PETSc and OpenMPI expose only as macros, and glibc's malloc_trim. No logic lives
+ * here. */
+#include <malloc.h>
 #include <petscsys.h>
 #include <mpi.h>
 
@@ -7,3 +9,6 @@ MPI_Comm petsc_ffi_comm_self(void) { return MPI_COMM_SELF; }
 size_t petsc_ffi_sizeof_petscint(void) { return sizeof(PetscInt); }
 size_t petsc_ffi_sizeof_petscscalar(void) { return sizeof(PetscScalar); }
 size_t petsc_ffi_sizeof_petscreal(void) { return sizeof(PetscReal); }
+/* glibc's malloc_trim(0), for the allocator PETSc, MUMPS and Rust share: hands the free memory
+ * of every arena back to the OS. */
+int petsc_ffi_malloc_trim(void) { return malloc_trim(0); }

@@ -120,13 +120,11 @@
 //!   difference to the finest run's, rewritten once every run is done; empty for a failed
 //!   run), `seconds` (wall clock; with `repeat`, the fastest of the run's converged repeats),
 //!   `seconds_slowest` (the slowest of them), `newton_its` (total over the steps that
-//!   converged),
-//!   `converged` (`true`/`false`), `augmentations` (Uzawa, over the steps), `peak_memory_mb`
-//!   (peak resident memory of the run, largest over the ranks: Linux's `VmHWM`, reset before
-//!   each run; the runs share one process, whose allocator keeps the
-//!   memory an earlier, larger run freed, so a run after a larger one reports at least that:
-//!   order the variants from small to large, or read the first run of each size), `on_front`
-//!   (see below).
+//!   converged), `converged` (`true`/`false`), `augmentations` (Uzawa, over the steps),
+//!   `peak_memory_mb` (peak resident memory of the run, largest over the ranks: Linux's
+//!   `VmHWM`, reset before each run; the runs share one process, so before each run the
+//!   memory the earlier ones freed goes back to the OS, [`Petsc::release_free_memory`], or a
+//!   run after a larger one would report that one's peak), `on_front` (see below).
 //! - `summary.json` ([`Summary`]): `case` = the study name (the study file's stem), `converged` =
 //!   every run converged, `metrics`: `slope_<variant>` (least-squares slope of log(error)
 //!   against log(h) over the variant's converged runs, when there are two or more) and
@@ -211,19 +209,20 @@ pub struct StudyFile {
     #[serde(default)]
     pub error_floor: f64,
     /// Errors within this fraction of each other (of the larger) count as equal on the Pareto
-    /// front: round-off. Two runs that compute the same integrals in a different order (a
-    /// different split of the overlaps into pallets, say) agree to 12 or more digits, and the
-    /// slower of them would otherwise stay on the front by an error smaller in the last digits.
-    /// Finite, in [0, 1). Default 1e-9.
+    /// front: differences far below any discretization error, such as the same integrals
+    /// summed in another order, or two quadratures that are exact to 12 digits (the two pallet
+    /// splits on the Hertz scene's curved faces), where the slower run would otherwise stay on
+    /// the front by an error smaller in the last digits. Finite, in [0, 1). Default 1e-9.
     #[serde(default = "default_error_noise")]
     pub error_noise: f64,
     /// How many times each run is made: its wall time is the fastest of them (noise from other
     /// work on the machine only ever adds time), its other results those of the first, whose
     /// outputs stay in `runs/` (the repeats write to `runs/<variant>/<level>.repeat/`, removed
-    /// afterwards). A repeat counts only when it converges. `study.csv` gives the slowest time
-    /// too. On more than one rank a repeat may take another Newton path (round-off of the
-    /// parallel solve). From 1 to 10. Default 1.
-    #[serde(default = "one_run")]
+    /// afterwards). A repeat counts only when it converges in as many Newton iterations as the
+    /// first (on more than one rank round-off of the parallel solve may take another path).
+    /// `study.csv` gives the slowest time too. Reference variants (`reference_only`, the
+    /// `[curves]` reference), whose times are not compared, run once. From 1 to 10. Default 1.
+    #[serde(default = "default_repeat")]
     pub repeat: usize,
     /// Wall times within this fraction of each other count as equal on the Pareto front: the
     /// machine's noise (two runs that do the same work differ by a few per cent, and the
@@ -249,7 +248,7 @@ pub struct StudyFile {
 const MAX_REPEAT: usize = 10;
 
 /// `repeat` when the study file does not set it.
-fn one_run() -> usize {
+fn default_repeat() -> usize {
     1
 }
 
@@ -804,6 +803,7 @@ impl Study {
                 if rank == 0 && self.curves.is_some() && stale.exists() {
                     std::fs::remove_file(&stale).map_err(|e| Error::io(&stale, e))?;
                 }
+                petsc.release_free_memory();
                 reset_peak_memory();
                 let ranks = variant.ranks.unwrap_or(job_size);
                 let t0 = Instant::now();
@@ -875,8 +875,8 @@ impl Study {
                         msg: missing_metric.unwrap_or_default(),
                     });
                 }
-                if record.converged && self.repeat > 1 {
-                    for t in self.repeat_times(petsc, v, level, &run_dir)? {
+                if record.converged && self.repeat > 1 && !self.is_reference(variant) {
+                    for t in self.repeat_times(petsc, v, level, &run_dir, record.newton_its)? {
                         record.seconds = record.seconds.min(t);
                         record.seconds_slowest = record.seconds_slowest.max(t);
                     }
@@ -1147,15 +1147,28 @@ impl Study {
         Ok((result, unused))
     }
 
+    /// A variant that is never on the Pareto front, whose time is not compared: a
+    /// `reference_only` one, or the `[curves]` reference.
+    fn is_reference(&self, variant: &VariantSpec) -> bool {
+        variant.reference_only
+            || self
+                .curves
+                .as_ref()
+                .is_some_and(|c| c.reference == variant.name)
+    }
+
     /// Makes the run of variant `v` at `level` `repeat - 1` more times, into a scratch folder
     /// beside `run_dir` that is removed afterwards, and returns the wall times of the repeats
-    /// that converged (rank 0's, on every rank).
+    /// that converged in the first run's `newton_its` (rank 0's, on every rank: on more than
+    /// one rank round-off may steer a repeat onto another Newton path, whose time is another
+    /// run's).
     fn repeat_times(
         &self,
         petsc: &Petsc,
         v: usize,
         level: usize,
         run_dir: &Path,
+        newton_its: usize,
     ) -> Result<Vec<f64>> {
         let scratch = run_dir.with_extension("repeat");
         let mut times = Vec::with_capacity(self.repeat - 1);
@@ -1163,12 +1176,15 @@ impl Study {
             let t0 = Instant::now();
             let (result, _) = self.run_one(petsc, v, level, &scratch)?;
             let seconds = t0.elapsed().as_secs_f64();
-            let converged = match result {
-                Some(Ok(s)) => s.converged,
+            let same_path = match result {
+                Some(Ok(s)) => {
+                    s.converged
+                        && s.steps.iter().map(|st| st.newton_its).sum::<usize>() == newton_its
+                }
                 Some(Err(e)) if !e.is_collective() => return Err(self.run_error(v, level, e)),
                 _ => false,
             };
-            let mut figures = [seconds, f64::from(u8::from(converged))];
+            let mut figures = [seconds, f64::from(u8::from(same_path))];
             petsc
                 .world()
                 .process_at_rank(0)
@@ -1682,7 +1698,7 @@ fn study_csv(runs: &[RunRecord]) -> String {
 }
 
 /// When two runs count as equal on the Pareto front (the study keys of the same names).
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug)]
 pub struct Ties {
     /// Errors at or below this are equal.
     pub error_floor: f64,
@@ -1690,6 +1706,15 @@ pub struct Ties {
     pub error_noise: f64,
     /// Wall times that differ by at most this fraction of the larger are equal.
     pub time_noise: f64,
+}
+
+impl Ties {
+    /// Only equal errors and equal times are equal.
+    pub const EXACT: Ties = Ties {
+        error_floor: 0.0,
+        error_noise: 0.0,
+        time_noise: 0.0,
+    };
 }
 
 /// The runs on the Pareto front of error against wall time: converged runs with a finite
@@ -1900,6 +1925,18 @@ mod tests {
         }
     }
 
+    /// A study file that says nothing of them: errors within 1e-9 relative are equal, exact
+    /// times only, one run each.
+    #[test]
+    fn study_file_defaults() {
+        let file: StudyFile = toml::from_str("case = \"case.toml\"\nmetric = \"e\"\n").unwrap();
+        assert_eq!(file.error_noise, 1e-9);
+        assert_eq!(
+            (file.error_floor, file.time_noise, file.repeat),
+            (0.0, 0.0, 1)
+        );
+    }
+
     #[test]
     fn pareto_front_keeps_the_runs_nothing_beats() {
         let run = |variant: &str, seconds: f64, error: Option<f64>, converged: bool| {
@@ -1918,7 +1955,7 @@ mod tests {
             error_noise,
             time_noise,
         };
-        let exact = Ties::default();
+        let exact = Ties::EXACT;
         assert_eq!(pareto_front(&runs, exact), vec![0, 1, 5]);
         assert!(pareto_front(&[], exact).is_empty());
         // Below the floor, errors are equal: the slow fine run is beaten by the fast one.

@@ -239,6 +239,41 @@ fn repeated_runs_keep_the_fastest_time() {
     }
 }
 
+/// Peak memory is each run's own: a small run after a large one (the second variant's coarse
+/// run after the first's fine one) reads its own peak, not the memory the large run freed
+/// (measured: 59 MB after 198 MB, and 198 MB before the freed memory went back to the OS).
+#[test]
+fn peak_memory_is_each_runs_own() {
+    let study = r#"
+case = "case.toml"
+metric = "energy_error"
+
+[[refinement]]
+h = 0.5
+set = { "mesh.0.n_circ" = 2, "mesh.0.n_rad" = 2 }
+
+[[refinement]]
+h = 0.2
+set = { "mesh.0.n_circ" = 5, "mesh.0.n_rad" = 5 }
+
+[[variant]]
+name = "first"
+set = { "mesh.0.element" = "hex27" }
+
+[[variant]]
+name = "second"
+set = { "mesh.0.element" = "hex27" }
+"#;
+    let dir = study_dir("study_peak_memory", study);
+    let o = run_study(&dir, &["-q"]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let rows = csv_rows(&dir.join("out"));
+    let peak = |i: usize| rows[i]["peak_memory_mb"].parse::<f64>().unwrap();
+    let (coarse, fine, coarse_after_fine) = (peak(0), peak(1), peak(2));
+    assert!(fine > 2.0 * coarse, "{rows:?}");
+    assert!(coarse_after_fine < 1.5 * coarse, "{rows:?}");
+}
+
 #[test]
 fn unknown_path_fails_with_one_line_naming_it() {
     let dir = study_dir(
@@ -623,10 +658,13 @@ fn one_refinement_needs_curves_and_curves_keys_are_checked() {
 /// none.
 #[test]
 fn variants_sweep_ranks_and_petsc_options() {
+    // Every run made twice (`repeat`): collective on 2 ranks, also for the 1-rank variant.
     let dir = study_dir(
         "study_ranks_options",
-        &small_study(
-            r#"
+        &format!(
+            "repeat = 2\n{}",
+            small_study(
+                r#"
 [[variant]]
 name = "two_ranks"
 
@@ -644,6 +682,7 @@ may_fail = true
 name = "gmres"
 petsc = "-pc_type jacobi -ksp_rtol 1e-13 -ksp_max_it 5000 -mat_mumps_icntl_8 77"
 "#,
+            )
         ),
     );
     let out = dir.join("out");
@@ -675,6 +714,14 @@ petsc = "-pc_type jacobi -ksp_rtol 1e-13 -ksp_max_it 5000 -mat_mumps_icntl_8 77"
         let bogus = row("bogus_solver", level);
         assert_eq!(bogus["converged"], "false", "{bogus:?}");
         assert!(bogus["error"].is_empty());
+        // A failed run is not repeated; a converged one may be slower on its repeat, never
+        // faster than the time kept.
+        assert_eq!(bogus["seconds"], bogus["seconds_slowest"], "{bogus:?}");
+        for v in ["two_ranks", "one_rank", "gmres"] {
+            let r = row(v, level);
+            let time = |k: &str| r[k].parse::<f64>().unwrap();
+            assert!(time("seconds") <= time("seconds_slowest"), "{r:?}");
+        }
     }
     // An option no PETSc object reads draws a warning naming the variant, also when it
     // overrides one the command line set; options that were read do not. The command line's

@@ -164,6 +164,17 @@ impl Petsc {
     pub fn size(&self) -> usize {
         self.world().size() as usize
     }
+
+    /// Hands the memory this process freed back to the OS (glibc's `malloc_trim`: PETSc's
+    /// objects, MUMPS's factors and Rust's data share one allocator, which otherwise keeps
+    /// what a large run freed, so that the resident memory of a later, smaller run starts at
+    /// the larger one's peak). Between the runs of a study.
+    pub fn release_free_memory(&self) {
+        // SAFETY: malloc_trim only walks the allocator's own free lists.
+        unsafe {
+            p::petsc_ffi_malloc_trim();
+        }
+    }
 }
 
 impl Petsc {
