@@ -142,7 +142,8 @@
 //!   run a point, its **Pareto front** ringed: the runs that no other run beats in both (no
 //!   more time and no larger error, one of them strictly; errors at or below the study's
 //!   `error_floor` count as equal, and so do errors within its `error_noise` of each other
-//!   (relative, round-off) and wall times within its `time_noise`; [`pareto_front`]);
+//!   (relative: far below any discretization error) and wall times within its `time_noise`;
+//!   [`pareto_front`]);
 //!   variants with `reference_only = true`
 //!   are plotted but not candidates. Without `[curves]` the error is the metric (with
 //!   `finest_reference`, its relative difference to the finest run's); with `[curves]` (no
