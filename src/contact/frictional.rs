@@ -97,6 +97,17 @@
 //! derivative, and the law's derivatives from `contact::law`. Friction makes it nonsymmetric.
 //! With `mu = 0` nothing of friction is computed (no old positions, no slip, no return map).
 //!
+//! The law's inputs in a tangent (`a`, `g`, `gt`, so `gh`, `p`, `dsh` and every branch: open or
+//! pressed, stick or slip) come from the residual's weights (`ContactPass::values_at`, the
+//! same positions, no new integration), and only `d n1`, `d n2` from the linearized kernel,
+//! whose weights agree with them to round-off only. That round-off is magnified by the gap, a
+//! difference of positions of order 1 that a penalty leaves at 1e-7 or less: measured on the
+//! scaling scene, a node on the Coulomb cone at the start of a step (its trial 1e-16 from it in
+//! the residual) sat 1.25e-10 inside it in the tangent's kinematics, beyond the cone's tie band
+//! ([`crate::contact::law::CONE_TIE`]), and took the stick tangent while its residual slipped;
+//! which of the two happened followed round-off, so 1 and 2 ranks took 53 and 68 Newton
+//! iterations. Both take 53 now.
+//!
 //! # Uzawa
 //!
 //! After a converged Newton solve, each node's multipliers are updated (law::uzawa_update);
@@ -614,14 +625,26 @@ impl ContactInterfaces {
                     Ok(n) => n,
                     Err(e) => return Ok(Some(format!("interface '{}': {e}", iface.name))),
                 };
-                let pairs = if tangent {
+                let values = pass.values_at(&ctx, Some(timed), &mut stats);
+                // The tangent's weights with their derivatives; the law's inputs (area, gap,
+                // slip) still come from the residual's weights, so that every branch of the law
+                // (open or pressed, stick or slip, which the cone's tie band decides to 1e-10)
+                // is the one the residual took. The two kernels' weights agree to round-off
+                // only, and a gap of a penalty's penetration, a difference of positions of
+                // order 1, magnifies that to 1e-10 relative and more.
+                let linearized = if tangent {
                     let candidates = timed
                         .search
                         .time(|| pass.candidates(&x, &pass.local_faces, EVAL_MARGIN));
-                    let integrate = || pass.integrate(&ctx, candidates, true, &mut stats);
-                    Rc::new(timed.integration.time(integrate))
+                    let mut own = RejectStats::default();
+                    let integrate = || pass.integrate(&ctx, candidates, true, &mut own);
+                    let pairs = timed.integration.time(integrate);
+                    // Counted by the residual's weights, but for derivatives that are not
+                    // finite where the values are.
+                    stats.non_finite += own.non_finite;
+                    Some(pairs)
                 } else {
-                    pass.values_at(&ctx, Some(timed), &mut stats)
+                    None
                 };
                 if stats.non_finite > 0 {
                     return Ok(Some(format!(
@@ -630,9 +653,14 @@ impl ContactInterfaces {
                     )));
                 }
                 timed.assembly.time(|| -> Result<()> {
-                    let by_node = pass.pairs_by_node(&pairs, &pass.held);
-                    for (&a, terms) in &by_node {
-                        let (block, _) = pass.node_block(&ctx, &normals, a, terms, tangent);
+                    let measured = pass.pairs_by_node(&values, &pass.held);
+                    let differentiated = linearized
+                        .as_ref()
+                        .map(|pairs| pass.pairs_by_node(pairs, &pass.held));
+                    let by_node = differentiated.as_ref().unwrap_or(&measured);
+                    for (&a, terms) in by_node {
+                        let kin = pass.kinematics(&ctx, measured.get(&a).unwrap_or(terms));
+                        let (block, _) = pass.node_block(&ctx, &normals, a, &kin, terms, tangent);
                         if let Some(block) = block {
                             sink(&block)?;
                         }
@@ -720,7 +748,10 @@ impl ContactInterfaces {
             .iter()
             .map(|&a| {
                 let fields = match by_node.get(&a) {
-                    Some(terms) => p.node_block(&ctx, &normals, a, terms, false).1,
+                    Some(terms) => {
+                        let kin = p.kinematics(&ctx, terms);
+                        p.node_block(&ctx, &normals, a, &kin, terms, false).1
+                    }
                     None => NodeFields {
                         normal: normals.normal(p.nodes[a]).unwrap_or_default(),
                         ..Default::default()
@@ -1519,19 +1550,21 @@ impl ContactPass {
     }
 
     /// Forces (and tangent) of traction node `a` from its pairs `terms`, and its fields.
-    /// `None` when the node carries no traction.
+    /// `None` when the node carries no traction. `kin` is the node's [`Self::kinematics`]:
+    /// of `terms` for a residual, of the residual's weights for a tangent (see
+    /// [`ContactInterfaces::assemble`]).
     fn node_block(
         &self,
         ctx: &EvalContext,
         normals: &NodalNormals,
         a: usize,
+        kin: &Kinematics,
         terms: &[(&PairData, usize)],
         tangent: bool,
     ) -> (Option<NodeBlock>, NodeFields) {
         let st = &self.state[a];
         let node = self.nodes[a];
         let nu = normals.normal(node).unwrap_or_default();
-        let kin = self.kinematics(ctx, terms);
         let mut fields = NodeFields {
             normal: nu,
             ..Default::default()
