@@ -19,13 +19,9 @@ fn run_scaling(logs: &[&Path], out: &Path) -> std::process::Output {
 
 #[test]
 fn speedup_from_the_logs_of_one_and_two_ranks() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/contact_patch");
-    let case = common::write_case(
-        "scaling_patch",
-        &std::fs::read_to_string(dir.join("case.toml")).unwrap(),
-    );
+    let text = common::scene_text("contact_patch");
+    let case = common::write_scene_copy("scaling_patch", "contact_patch", &text);
     let here = case.parent().unwrap();
-    std::fs::copy(dir.join("petscrc"), here.join("petscrc")).unwrap();
     let mut logs = Vec::new();
     let mut newton_its = Vec::new();
     for ranks in [1, 2] {

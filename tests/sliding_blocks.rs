@@ -134,14 +134,11 @@ const MORTAR_SMOOTHNESS: f64 = 3.0;
     ignore = "release only: cargo test --release --test sliding_blocks"
 )]
 fn newton_converges_quadratically_within_8_iterations() {
-    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/sliding_blocks");
-    let text = std::fs::read_to_string(scene.join("case.toml"))
-        .unwrap()
+    let text = common::scene_text("sliding_blocks")
         .replace("vtu_every = 5", "vtu_every = 0")
         .replace("figure = \"study.toml\"", "");
-    let case = common::write_case("sliding_blocks_newton", &text);
-    // The scene's solver options (MUMPS without its matrix scaling).
-    std::fs::copy(scene.join("petscrc"), case.with_file_name("petscrc")).unwrap();
+    // With the scene's solver options (MUMPS without its matrix scaling).
+    let case = common::write_scene_copy("sliding_blocks_newton", "sliding_blocks", &text);
     let (out, stdout) = common::run_case(&case, 1, &["-snes_monitor"]);
     let most = common::metric(&out, "max_newton_its");
     assert!(most <= 8.0, "max_newton_its {most}");
@@ -178,13 +175,10 @@ fn newton_converges_quadratically_within_8_iterations() {
     ignore = "release only: cargo test --release --test sliding_blocks"
 )]
 fn refined_blocks_take_one_newton_path_on_1_and_2_ranks() {
-    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/scaling");
-    let text = std::fs::read_to_string(scene.join("case.toml"))
-        .unwrap()
-        .replacen("[steps]\n", "[steps]\npredictor = false\n", 1);
+    let text =
+        common::scene_text("scaling").replacen("[steps]\n", "[steps]\npredictor = false\n", 1);
     assert!(text.contains("predictor = false"));
-    let case = common::write_case("refined_blocks_paths", &text);
-    std::fs::copy(scene.join("petscrc"), case.with_file_name("petscrc")).unwrap();
+    let case = common::write_scene_copy("refined_blocks_paths", "scaling", &text);
     let steps = |ranks: usize| -> Vec<u64> {
         let (out, _) = common::run_case(&case, ranks, &["-q"]);
         common::summary(&out)["steps"]

@@ -128,17 +128,12 @@ fn scheme_one_on_quad9_passes_and_on_quad8_is_refused() {
 /// 1e-14 relative apart, interface area 1.3e-16).
 #[test]
 fn tied_sphere_with_fan_pallets() {
-    let case_dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/thick_sphere_tied");
-    let text = std::fs::read_to_string(case_dir.join("case.toml")).unwrap();
+    let text = common::scene_text("thick_sphere_tied");
     let mut runs = Vec::new();
     for split in ["centroid", "fan"] {
         let name = format!("tied_sphere_{split}");
-        let case = common::write_case(&name, &common::with_pallets(&text, split));
-        std::fs::copy(
-            case_dir.join("petscrc"),
-            case.parent().unwrap().join("petscrc"),
-        )
-        .unwrap();
+        let text = common::with_pallets(&text, split);
+        let case = common::write_scene_copy(&name, "thick_sphere_tied", &text);
         let (out, _) = common::run_case(&case, 1, &["-q"]);
         runs.push(out);
     }
@@ -161,14 +156,8 @@ fn tied_sphere_with_fan_pallets() {
 
 #[test]
 fn tied_sphere_one_and_two_ranks_agree() {
-    let case_dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/thick_sphere_tied");
-    let text = std::fs::read_to_string(case_dir.join("case.toml")).unwrap();
-    let case = common::write_case("tied_sphere_ranks", &text);
-    std::fs::copy(
-        case_dir.join("petscrc"),
-        case.parent().unwrap().join("petscrc"),
-    )
-    .unwrap();
+    let text = common::scene_text("thick_sphere_tied");
+    let case = common::write_scene_copy("tied_sphere_ranks", "thick_sphere_tied", &text);
     let (out1, _) = common::run_case(&case, 1, &["-q"]);
     let (out2, _) = common::run_case(&case, 2, &["-q"]);
     let d =

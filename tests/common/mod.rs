@@ -28,6 +28,26 @@ pub fn with_pallets(text: &str, split: &str) -> String {
     out
 }
 
+/// The case text of the shipped scene `cases/<scene>`.
+pub fn scene_text(scene: &str) -> String {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("cases")
+        .join(scene);
+    std::fs::read_to_string(path.join("case.toml")).unwrap()
+}
+
+/// Writes `text` (a shipped scene's case, edited) as `case.toml` into a fresh folder named
+/// `name`, with the scene's PETSc options file beside it, and returns its path.
+pub fn write_scene_copy(name: &str, scene: &str, text: &str) -> PathBuf {
+    let case = write_case(name, text);
+    let options = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("cases")
+        .join(scene)
+        .join("petscrc");
+    std::fs::copy(options, case.with_file_name("petscrc")).unwrap();
+    case
+}
+
 /// A fresh, empty folder under cargo's temporary test directory.
 pub fn fresh_dir(name: &str) -> PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
