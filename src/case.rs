@@ -285,6 +285,10 @@ pub struct Scene {
     pub max_cuts: usize,
     /// Consistent load-step predictor on (see `solver`).
     pub predictor: bool,
+    /// The predictor reuses the last step's last Newton factorization when it can
+    /// (`steps.predictor_tangent = "last_newton"`) instead of assembling the tangent at the
+    /// converged state.
+    pub predictor_reuses_newton_tangent: bool,
     /// Frictional steps start with a stick solve (see `solver`).
     pub stick_predictor: bool,
     /// An unconverged step is accepted and the run goes on (`steps.on_failure = "continue"`)
@@ -658,16 +662,19 @@ impl Scene {
             steps: file.steps.count,
             max_cuts: file.steps.max_cuts,
             predictor: file.steps.predictor,
+            predictor_reuses_newton_tangent: two_words(
+                "steps.predictor_tangent",
+                &file.steps.predictor_tangent,
+                ["converged", "last_newton"],
+            )
+            .map_err(err)?,
             stick_predictor: file.steps.stick_predictor,
-            continue_on_failure: match file.steps.on_failure.as_str() {
-                "cut" => false,
-                "continue" => true,
-                other => {
-                    return Err(err(format!(
-                        "steps.on_failure = \"{other}\": must be \"cut\" or \"continue\""
-                    )))
-                }
-            },
+            continue_on_failure: two_words(
+                "steps.on_failure",
+                &file.steps.on_failure,
+                ["cut", "continue"],
+            )
+            .map_err(err)?,
             newton: file.newton.clone(),
             vtu_every: file.output.vtu_every,
             verification,
@@ -1594,5 +1601,17 @@ impl XorShift {
         self.0 ^= self.0 << 25;
         self.0 ^= self.0 >> 27;
         (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    }
+}
+
+/// A key that takes one of two words: false for the first, true for the second, and otherwise
+/// the one-line message naming the key and both words.
+fn two_words(key: &str, value: &str, [no, yes]: [&str; 2]) -> Result<bool, String> {
+    match value {
+        v if v == no => Ok(false),
+        v if v == yes => Ok(true),
+        other => Err(format!(
+            "{key} = \"{other}\": must be \"{no}\" or \"{yes}\""
+        )),
     }
 }

@@ -17,7 +17,7 @@
 //! partitioning, the dof numbering, the bulk work of the load-step predictor) and `setup` |
 //!
 //! The contact stages count every contact evaluation, the reactions of the output included
-//! (`summary.json` counts those of the Newton solves only). The case file is read and the mesh
+//! (`summary.json` counts those of the steps' solves, the predictors' included). The case file is read and the mesh
 //! built before PETSc starts, so that serial part is in no stage and not in the wall times.
 //!
 //! The speedup of a phase on run `k` is its time on the first run over its time on run `k`

@@ -566,6 +566,11 @@ value = [0.0, 0.0, -1.0]
             "steps.on_failure",
         ),
         check(
+            "steps_unknown_predictor_tangent",
+            valid_plus("[steps]\ncount = 1\npredictor_tangent = \"stale\"\n"),
+            "steps.predictor_tangent",
+        ),
+        check(
             "newton_rtol_zero",
             valid_plus("[newton]\nrtol = 0.0\n"),
             "rtol",

@@ -349,6 +349,77 @@ fn contact_one_and_two_ranks_agree() {
     }
 }
 
+/// `steps.predictor_tangent = "last_newton"`: the predictor solves with the last step's last
+/// Newton factorization, so only the first step's predictor factorizes (PETSc's count of
+/// `MatLUFactorNum` outside the solver's stages in `-log_view`, where the predictor runs: one
+/// against one per step with the converged tangent; the test fails when the reuse is dropped),
+/// and the run ends where the consistent predictor's does, within the Newton tolerance, on 1
+/// and 2 ranks.
+#[test]
+fn predictor_reusing_the_newton_factorization_factorizes_once() {
+    let base = common::slide_case(5);
+    let reuse = base.replace(
+        "count = 5",
+        "count = 5\npredictor_tangent = \"last_newton\"",
+    );
+    assert_ne!(reuse, base);
+    let run = |name: &str, text: &str, ranks: usize| {
+        let case = common::write_case(&format!("{name}_{ranks}"), text);
+        let log = case.parent().unwrap().join("log.txt");
+        let view = format!(":{}", log.display());
+        let (out, _) = common::run_case(&case, ranks, &["-q", "-log_view", &view]);
+        let steps = common::converged_newton_its(&out).len();
+        let cut = common::summary(&out)["steps"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|s| s["cut"] != 0);
+        assert!(!cut, "{name}: a step was cut");
+        (out, predictor_factorizations(&log), steps)
+    };
+    let (consistent, count, steps) = run("predictor_converged", &base, 1);
+    assert_eq!(
+        count, steps,
+        "converged tangent: one factorization per step"
+    );
+    let (reused, count, _) = run("predictor_last_newton", &reuse, 1);
+    assert_eq!(
+        count, 1,
+        "last_newton: only the first step's predictor factorizes"
+    );
+    let (reused_2, count, _) = run("predictor_last_newton", &reuse, 2);
+    assert_eq!(count, 1, "last_newton on 2 ranks");
+    let d = |a: &std::path::Path, b: &std::path::Path| {
+        common::max_rel_difference(&common::displacements(a), &common::displacements(b))
+    };
+    let apart = d(&consistent, &reused);
+    assert!(apart < 1e-7, "last_newton against converged: {apart:e}");
+    let ranks = d(&reused, &reused_2);
+    assert!(ranks < 1e-8, "last_newton, 1 vs 2 ranks: {ranks:e}");
+}
+
+/// The numerical factorizations in the main stage of a `-log_view` file: those outside the
+/// solver's stages, which are the load-step predictor's.
+fn predictor_factorizations(log: &std::path::Path) -> usize {
+    let text = std::fs::read_to_string(log).unwrap();
+    let main_stage = text
+        .split("--- Event Stage 0:")
+        .nth(1)
+        .and_then(|rest| rest.split("--- Event Stage 1:").next())
+        .unwrap_or_else(|| panic!("no event stages in {}", log.display()));
+    main_stage
+        .lines()
+        .filter(|l| l.starts_with("MatLUFactorNum "))
+        .map(|l| {
+            l.split_whitespace()
+                .nth(1)
+                .unwrap()
+                .parse::<usize>()
+                .unwrap()
+        })
+        .sum()
+}
+
 /// The slide of [`common::slide_case`] (5 steps) with the lower, larger surface secondary.
 fn swapped_slide() -> String {
     let slide = common::slide_case(5);

@@ -188,6 +188,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         snes.freeze_jacobian()?;
     }
     let mut tangent_ready = false;
+    let mut newton_tangent = NewtonTangent::Other;
     let mut results = Results::new(scene, &opts.out_dir, rank, ranks)?;
     drop(setup_guard);
     phases.add("setup", t_setup.elapsed().as_secs_f64());
@@ -248,10 +249,14 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                 if any > 0 {
                     jac = new_jacobian(&sparsity)?;
                     jac.allow_new_nonzeros()?;
+                    newton_tangent = NewtonTangent::Other;
                 }
             }
             let contact_saved = model.contact.save();
             state.borrow_mut().assembly_seconds = 0.0;
+            // The contact work of this step's evaluations, the predictor's included (the rest of
+            // `assembly` is `bulk_assembly`).
+            let contact_before = contact_seconds(&model);
             let t_solve = Instant::now();
             if scene.predictor {
                 let p = Predictor {
@@ -261,11 +266,18 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                     state: &state,
                     world: &world,
                 };
-                p.apply(&mut x, &mut jac, &mut snes, t, t_new, &mut tangent_ready)?;
+                let reuse = scene.predictor_reuses_newton_tangent
+                    && newton_tangent == NewtonTangent::OfLastConvergedStep;
+                p.apply(
+                    &mut x,
+                    &mut jac,
+                    &mut snes,
+                    (t, t_new),
+                    &mut tangent_ready,
+                    reuse,
+                )?;
             }
             state.borrow_mut().t = t_new;
-            // The contact work of the Newton evaluations (the predictor's is in `solve`).
-            let contact_before = contact_seconds(&model);
             let assembly_stage = phases.stage("assembly");
             let solve_guard = phases.push("solve")?;
             let multipliers = model.tying.multipliers();
@@ -415,6 +427,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                     && outcome.domain_error.is_none()
                     && x.norm2()?.is_finite();
                 if !accepted_unconverged {
+                    newton_tangent = NewtonTangent::Other;
                     cuts_in_row += 1;
                     x_prev.copy_to(&mut x)?;
                     model.tying.set_multipliers(&multipliers);
@@ -443,6 +456,14 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                     continue;
                 }
             }
+            // The factorization the solver holds now: the last Newton iteration's of the step's
+            // final, converged solve when it took one (after the predictor's and any failed
+            // attempt's), else another.
+            newton_tangent = if outcome.converged && outcome.iterations > 0 {
+                NewtonTangent::OfLastConvergedStep
+            } else {
+                NewtonTangent::Other
+            };
             step += 1;
             t = t_new;
             let t_out = Instant::now();
@@ -677,6 +698,16 @@ fn retries_note(cuts: usize, retries: usize, line_search: Option<&str>) -> Strin
     }
 }
 
+/// What the linear solver's factorization holds when a step begins (for the predictor's
+/// `steps.predictor_tangent = "last_newton"`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum NewtonTangent {
+    /// The tangent of the last Newton iteration of the last step, which converged.
+    OfLastConvergedStep,
+    /// Anything else: nothing yet, a failed attempt's, an unconverged step's, or a new matrix.
+    Other,
+}
+
 /// The consistent load-step predictor.
 ///
 /// From the converged state x_n at t_n, the first Newton iterate of the step to t_{n+1} is
@@ -687,6 +718,13 @@ fn retries_note(cuts: usize, retries: usize, line_search: Option<&str>) -> Strin
 /// `t_n + 1e-6 (t_{n+1} - t_n)`; loads are linear in their curves, prescribed displacements enter
 /// nonlinearly, and the predictor is only a starting point for Newton, so its accuracy is
 /// ample. For a pure load increment it equals the first Newton step.
+///
+/// With `steps.predictor_tangent = "last_newton"` the solve reuses the factorization of the
+/// last step's last Newton iteration, `K(x_n^(k-1))`, as PETSc's linear solver still holds it
+/// (the matrix is untouched since, so nothing is refactorized): no assembly and no
+/// factorization, a prediction that differs from the consistent one by the effect of the last
+/// Newton correction on the tangent. It is used only when that factorization is one of the
+/// last step's converged Newton solve ([`NewtonTangent`]).
 struct Predictor<'a> {
     scene: &'a Scene,
     dofs: &'a DofMap,
@@ -700,15 +738,16 @@ impl Predictor<'_> {
     /// residual at x_n is not available (an inverted element: Newton will report it).
     ///
     /// `tangent_ready` marks a constant tangent (a linear scene) already assembled in `jac`: it
-    /// is then neither reassembled nor refactorized.
+    /// is then neither reassembled nor refactorized; `reuse_newton_tangent` marks the last
+    /// Newton factorization as the one to solve with (the type's docs).
     fn apply(
         &self,
         x: &mut Vector,
         jac: &mut Matrix,
         snes: &mut Snes,
-        t0: f64,
-        t1: f64,
+        (t0, t1): (f64, f64),
         tangent_ready: &mut bool,
+        reuse_newton_tangent: bool,
     ) -> Result<()> {
         const EPS: f64 = 1e-6;
         let f0 = self.residual_at(x, t0)?;
@@ -720,7 +759,7 @@ impl Predictor<'_> {
         rhs.axpy(-1.0, &f0)?;
         rhs.scale(1.0 / EPS)?;
         rhs.axpy(1.0, &f0)?;
-        if !*tangent_ready {
+        if !*tangent_ready && !reuse_newton_tangent {
             let mut s = self.state.borrow_mut();
             let started = Instant::now();
             s.t = t0;
