@@ -14,10 +14,12 @@
 //! | linear solve | `solve` (SNES: the linear solves, norms and updates) |
 //! | output | `output` |
 //! | start and setup | `Main Stage` (everything outside the other stages: PETSc's start, the
-//! partitioning, the dof numbering, the bulk work of the load-step predictor) and `setup` |
+//! partitioning, the dof numbering, the load-step predictor's bulk work, linear solves and
+//! factorizations) and `setup` |
 //!
 //! The contact stages count every contact evaluation, the reactions of the output included
-//! (`summary.json` counts those of the steps' solves, the predictors' included). The case file is read and the mesh
+//! (`summary.json` counts those of the steps' solves, the predictors' included, and the
+//! predictor's linear solves in its `solve`). The case file is read and the mesh
 //! built before PETSc starts, so that serial part is in no stage and not in the wall times.
 //!
 //! The speedup of a phase on run `k` is its time on the first run over its time on run `k`

@@ -401,9 +401,10 @@ pub struct StepsSpec {
     /// step's last Newton iteration, reused as it is (no assembly, no factorization); it
     /// differs from the converged tangent by the last Newton correction, and the first Newton
     /// iteration of the step corrects the prediction. The first step, and a step after a cut,
-    /// an unconverged step or a grown contact pattern, assemble the tangent as `"converged"`
-    /// does. Measured on the sliding blocks: the whole run 19 % shorter (3.85 s against
-    /// 4.77 s), 160 Newton iterations against 161, the force curve within 3e-12
+    /// an unconverged step, a step whose final solve took no Newton iteration or a grown
+    /// contact pattern, assemble the tangent as `"converged"` does. Read only with
+    /// `predictor = true`. Measured on the sliding blocks: the whole run 19 % shorter (3.85 s
+    /// against 4.77 s), 160 Newton iterations against 161, the force curve within 3e-12
     /// (`cases/sliding_blocks/study_solver.toml`). The code's default stays the consistent
     /// predictor: on hard cases any change of the predictor changes Newton's path.
     #[serde(default = "converged")]

@@ -704,7 +704,9 @@ fn retries_note(cuts: usize, retries: usize, line_search: Option<&str>) -> Strin
 enum NewtonTangent {
     /// The tangent of the last Newton iteration of the last step, which converged.
     OfLastConvergedStep,
-    /// Anything else: nothing yet, a failed attempt's, an unconverged step's, or a new matrix.
+    /// Anything else: nothing yet, a failed attempt's, an unconverged step's, a step whose
+    /// final solve took no Newton iteration (the factorization is then an earlier solve's), or
+    /// a new matrix.
     Other,
 }
 
