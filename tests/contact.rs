@@ -375,7 +375,7 @@ fn predictor_reusing_the_newton_factorization_factorizes_once() {
             .iter()
             .any(|s| s["cut"] != 0);
         assert!(!cut, "{name}: a step was cut");
-        (out, predictor_factorizations(&log), steps)
+        (out, common::predictor_factorizations(&log), steps)
     };
     let (consistent, count, steps) = run("predictor_converged", &base, 1);
     assert_eq!(
@@ -396,28 +396,6 @@ fn predictor_reusing_the_newton_factorization_factorizes_once() {
     assert!(apart < 1e-7, "last_newton against converged: {apart:e}");
     let ranks = d(&reused, &reused_2);
     assert!(ranks < 1e-8, "last_newton, 1 vs 2 ranks: {ranks:e}");
-}
-
-/// The numerical factorizations in the main stage of a `-log_view` file: those outside the
-/// solver's stages, which are the load-step predictor's.
-fn predictor_factorizations(log: &std::path::Path) -> usize {
-    let text = std::fs::read_to_string(log).unwrap();
-    let main_stage = text
-        .split("--- Event Stage 0:")
-        .nth(1)
-        .and_then(|rest| rest.split("--- Event Stage 1:").next())
-        .unwrap_or_else(|| panic!("no event stages in {}", log.display()));
-    main_stage
-        .lines()
-        .filter(|l| l.starts_with("MatLUFactorNum "))
-        .map(|l| {
-            l.split_whitespace()
-                .nth(1)
-                .unwrap()
-                .parse::<usize>()
-                .unwrap()
-        })
-        .sum()
 }
 
 /// The slide of [`common::slide_case`] (5 steps) with the lower, larger surface secondary.

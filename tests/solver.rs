@@ -102,6 +102,53 @@ fn a_failing_step_is_cut_and_retried() {
     );
 }
 
+/// `steps.predictor_tangent = "last_newton"` after cut steps: a failed attempt leaves its own
+/// factorization behind, so the predictor of every retry assembles the tangent again, and only
+/// the predictor of a step after a converged one reuses the last Newton factorization. The
+/// block compressed 60 % in one step with at most 2 Newton iterations per solve is cut 17
+/// times; the predictor factorizes (in `-log_view`'s main stage) once plus once per cut, against
+/// once per attempt (steps plus cuts) with the converged tangent, and both end in the same
+/// state.
+#[test]
+fn the_predictor_reuses_no_factorization_of_a_failed_attempt() {
+    let base = common::compressed_block("hex8", 0.6, 1) + "[newton]\nmax_it = 2\n";
+    let run = |name: &str, tangent: &str| {
+        let text = base.replace(
+            "[steps]\n",
+            &format!("[steps]\npredictor_tangent = \"{tangent}\"\n"),
+        );
+        let case = common::write_case(name, &text);
+        let log = case.parent().unwrap().join("log.txt");
+        let view = format!(":{}", log.display());
+        let (out, _) = common::run_case(&case, 1, &["-q", "-log_view", &view]);
+        let steps = common::summary(&out)["steps"].as_array().unwrap().clone();
+        let cuts: usize = steps
+            .iter()
+            .map(|s| s["cut"].as_u64().unwrap() as usize)
+            .sum();
+        assert!(cuts >= 2, "{name}: expected cut steps, {cuts}");
+        (
+            out,
+            common::predictor_factorizations(&log),
+            steps.len(),
+            cuts,
+        )
+    };
+    let (reused, count, _, cuts) = run("predictor_cuts_last_newton", "last_newton");
+    assert_eq!(
+        count,
+        1 + cuts,
+        "last_newton: the first step and every retry factorize"
+    );
+    let (consistent, count, steps, cuts) = run("predictor_cuts_converged", "converged");
+    assert_eq!(count, steps + cuts, "converged: every attempt factorizes");
+    let d = common::max_rel_difference(
+        &common::displacements(&reused),
+        &common::displacements(&consistent),
+    );
+    assert!(d < 1e-8, "last_newton against converged after cuts: {d:e}");
+}
+
 /// With no cuts allowed the same scene fails: one clear line, exit 1, and a summary that says
 /// so (finished steps, none here, stay on disk).
 #[test]

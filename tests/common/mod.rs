@@ -375,3 +375,25 @@ count = {steps}
         divisions[0], divisions[1], divisions[2]
     )
 }
+
+/// The numerical factorizations in the main stage of a `-log_view` file: those outside the
+/// solver's stages, which are the load-step predictor's.
+pub fn predictor_factorizations(log: &Path) -> usize {
+    let text = std::fs::read_to_string(log).unwrap();
+    let main_stage = text
+        .split("--- Event Stage 0:")
+        .nth(1)
+        .and_then(|rest| rest.split("--- Event Stage 1:").next())
+        .unwrap_or_else(|| panic!("no event stages in {}", log.display()));
+    main_stage
+        .lines()
+        .filter(|l| l.starts_with("MatLUFactorNum "))
+        .map(|l| {
+            l.split_whitespace()
+                .nth(1)
+                .unwrap()
+                .parse::<usize>()
+                .unwrap()
+        })
+        .sum()
+}
