@@ -349,19 +349,16 @@ fn contact_one_and_two_ranks_agree() {
     }
 }
 
-/// `steps.predictor_tangent = "last_newton"`: the predictor solves with the last step's last
-/// Newton factorization, so only the first step's predictor factorizes (PETSc's count of
-/// `MatLUFactorNum` outside the solver's stages in `-log_view`, where the predictor runs: one
-/// against one per step with the converged tangent; the test fails when the reuse is dropped),
-/// and the run ends where the consistent predictor's does, within the Newton tolerance, on 1
-/// and 2 ranks.
+/// `steps.predictor_tangent = "last_newton"` (the default): the predictor solves with the last
+/// step's last Newton factorization, so only the first step's predictor factorizes (PETSc's
+/// count of `MatLUFactorNum` outside the solver's stages in `-log_view`, where the predictor
+/// runs: one against one per step with `"converged"`; the test fails when the reuse is
+/// dropped), and the run ends where the consistent predictor's does, within the Newton
+/// tolerance, on 1 and 2 ranks.
 #[test]
 fn predictor_reusing_the_newton_factorization_factorizes_once() {
-    let base = common::slide_case(5);
-    let reuse = base.replace(
-        "count = 5",
-        "count = 5\npredictor_tangent = \"last_newton\"",
-    );
+    let reuse = common::slide_case(5);
+    let base = reuse.replace("count = 5", "count = 5\npredictor_tangent = \"converged\"");
     assert_ne!(reuse, base);
     let run = |name: &str, text: &str, ranks: usize| {
         let case = common::write_case(&format!("{name}_{ranks}"), text);
