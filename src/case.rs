@@ -283,7 +283,7 @@ pub struct Scene {
     pub quadrature_degree: Option<usize>,
     pub steps: usize,
     pub max_cuts: usize,
-    /// Consistent load-step predictor on (see `solver`).
+    /// Load-step predictor on (`steps.predictor`; its tangent: the next field; see `solver`).
     pub predictor: bool,
     /// The predictor reuses the last step's last Newton factorization when it can
     /// (`steps.predictor_tangent = "last_newton"`) instead of assembling the tangent at the

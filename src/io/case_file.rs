@@ -390,9 +390,9 @@ pub struct StepsSpec {
     /// the load no longer advances in floating point).
     #[serde(default = "six")]
     pub max_cuts: usize,
-    /// Start each step's Newton from the consistent predictor (the step's load and prescribed
-    /// displacement increments applied through the converged tangent) instead of the last
-    /// converged state. Default true.
+    /// Start each step's Newton from a load-step predictor (the step's load and prescribed
+    /// displacement increments applied through a tangent: `predictor_tangent`, by default the
+    /// last Newton factorization) instead of the last converged state. Default true.
     #[serde(default = "yes")]
     pub predictor: bool,
     /// The tangent the predictor solves with. `"last_newton"` (default): the factorization of

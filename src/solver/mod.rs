@@ -14,7 +14,7 @@
 //! count includes the failed attempt; the redone solves are counted in the summary
 //! (`line_search_fallbacks`) and named in the progress line.
 //!
-//! Each step's Newton starts from the consistent predictor (`Predictor`, `steps.predictor`):
+//! Each step's Newton starts from the load-step predictor (`Predictor`, `steps.predictor`):
 //! measured, it halves the Newton iterations of displacement-driven steps and removes the cuts
 //! that a large prescribed increment otherwise causes.
 //!
@@ -721,9 +721,10 @@ enum NewtonTangent {
 /// nonlinearly, and the predictor is only a starting point for Newton, so its accuracy is
 /// ample. For a pure load increment it equals the first Newton step.
 ///
-/// With `steps.predictor_tangent = "last_newton"` the solve reuses the factorization of the
-/// last step's last Newton iteration, `K(x_n^(k-1))`, as PETSc's linear solver still holds it
-/// (the matrix is untouched since, so nothing is refactorized): no assembly and no
+/// With `steps.predictor_tangent = "last_newton"` (the default) the solve reuses the
+/// factorization of the last step's last Newton iteration, `K(x_n^(k-1))`, as PETSc's linear
+/// solver still holds it (the matrix is untouched since, so nothing is refactorized): no
+/// assembly and no
 /// factorization, a prediction that differs from the consistent one by the effect of the last
 /// Newton correction on the tangent. It is used only when that factorization is one of the
 /// last step's converged Newton solve ([`NewtonTangent`]).
