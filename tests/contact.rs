@@ -362,9 +362,7 @@ fn predictor_reusing_the_newton_factorization_factorizes_once() {
     assert_ne!(reuse, base);
     let run = |name: &str, text: &str, ranks: usize| {
         let case = common::write_case(&format!("{name}_{ranks}"), text);
-        let log = case.parent().unwrap().join("log.txt");
-        let view = format!(":{}", log.display());
-        let (out, _) = common::run_case(&case, ranks, &["-q", "-log_view", &view]);
+        let (out, factorizations) = common::run_counting_predictor_factorizations(&case, ranks);
         let steps = common::converged_newton_its(&out).len();
         let cut = common::summary(&out)["steps"]
             .as_array()
@@ -372,7 +370,7 @@ fn predictor_reusing_the_newton_factorization_factorizes_once() {
             .iter()
             .any(|s| s["cut"] != 0);
         assert!(!cut, "{name}: a step was cut");
-        (out, common::predictor_factorizations(&log), steps)
+        (out, factorizations, steps)
     };
     let (consistent, count, steps) = run("predictor_converged", &base, 1);
     assert_eq!(

@@ -118,21 +118,14 @@ fn the_predictor_reuses_no_factorization_of_a_failed_attempt() {
             &format!("[steps]\npredictor_tangent = \"{tangent}\"\n"),
         );
         let case = common::write_case(name, &text);
-        let log = case.parent().unwrap().join("log.txt");
-        let view = format!(":{}", log.display());
-        let (out, _) = common::run_case(&case, 1, &["-q", "-log_view", &view]);
+        let (out, factorizations) = common::run_counting_predictor_factorizations(&case, 1);
         let steps = common::summary(&out)["steps"].as_array().unwrap().clone();
         let cuts: usize = steps
             .iter()
             .map(|s| s["cut"].as_u64().unwrap() as usize)
             .sum();
         assert!(cuts >= 2, "{name}: expected cut steps, {cuts}");
-        (
-            out,
-            common::predictor_factorizations(&log),
-            steps.len(),
-            cuts,
-        )
+        (out, factorizations, steps.len(), cuts)
     };
     let (reused, count, _, cuts) = run("predictor_cuts_last_newton", "last_newton");
     assert_eq!(

@@ -98,16 +98,16 @@
 //! With `mu = 0` nothing of friction is computed (no old positions, no slip, no return map).
 //!
 //! The law's inputs in a tangent (`a`, `g`, `gt`, so `gh`, `p`, `dsh` and every branch: open or
-//! pressed, stick or slip) come from the residual's weights (`ContactPass::values_at`: the
-//! same positions, so its cached result, with no new integration in the usual flow), and the
-//! weights with their derivatives in `d F` (`n1`, `n2`, `d n1`, `d n2`) from the linearized
-//! kernel, whose weights agree with the residual's to round-off only. That round-off is magnified by the gap, a
+//! pressed, stick or slip) come from the residual's weights (`ContactPass::values_at`: the same
+//! positions, so its cached result, with no new integration in the usual flow), and the weights
+//! with their derivatives in `d F` (`n1`, `n2`, `d n1`, `d n2`) from the linearized kernel, whose
+//! weights agree with the residual's to round-off only. That round-off is magnified by the gap, a
 //! difference of positions of order 1 that a penalty leaves at 1e-7 or less: measured on the
-//! scaling scene, a node on the Coulomb cone at the start of a step (its trial 1e-16 from it in
-//! the residual) sat 1.25e-10 inside it in the tangent's kinematics, beyond the cone's tie band
+//! scaling scene, a node on the Coulomb cone at the start of a step (its trial 1e-16 from it in the
+//! residual) sat 1.25e-10 inside it in the tangent's kinematics, beyond the cone's tie band
 //! ([`crate::contact::law::CONE_TIE`]), and took the stick tangent while its residual slipped;
-//! which of the two happened followed round-off, so 1 and 2 ranks took 53 and 68 Newton
-//! iterations; with the residual's inputs both took 53 in three runs.
+//! which of the two happened followed round-off, so 1 and 2 ranks took 53 and 68 Newton iterations;
+//! with the residual's inputs both took 53 in three runs.
 //!
 //! # Uzawa
 //!
@@ -1411,8 +1411,8 @@ impl ContactPass {
     /// The weights are a function of the positions alone, and a state is evaluated several
     /// times: by a residual and the tangent that follows it at the same point (the law's
     /// inputs; module docs, "Consistent tangent"), and at a converged state by the Uzawa
-    /// update, the reactions, the output and the commit of the step. So the last result is kept and returned again
-    /// while the pass's nodes sit at the same positions, bit for bit.
+    /// update, the reactions, the output and the commit of the step. So the last result is
+    /// kept and returned again while the pass's nodes sit at the same positions, bit for bit.
     fn values_at(
         &self,
         ctx: &EvalContext,

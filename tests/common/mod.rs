@@ -376,9 +376,18 @@ count = {steps}
     )
 }
 
+/// Runs `case` on `ranks` with `-log_view` and returns its output folder and the load-step
+/// predictor's factorizations ([`predictor_factorizations`]).
+pub fn run_counting_predictor_factorizations(case: &Path, ranks: usize) -> (PathBuf, usize) {
+    let log = case.parent().unwrap().join(format!("log_{ranks}.txt"));
+    let view = format!(":{}", log.display());
+    let (out, _) = run_case(case, ranks, &["-q", "-log_view", &view]);
+    (out, predictor_factorizations(&log))
+}
+
 /// The numerical factorizations in the main stage of a `-log_view` file: those outside the
 /// solver's stages, which are the load-step predictor's.
-pub fn predictor_factorizations(log: &Path) -> usize {
+fn predictor_factorizations(log: &Path) -> usize {
     let text = std::fs::read_to_string(log).unwrap();
     let main_stage = text
         .split("--- Event Stage 0:")
