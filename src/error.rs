@@ -77,3 +77,21 @@ impl Error {
         }
     }
 }
+
+/// Prints `mortar: error: {message}` on stderr (see [`print_warning`]).
+pub fn print_error(message: impl std::fmt::Display) {
+    print_line("error", message);
+}
+
+/// Prints `mortar: warning: {message}` on stderr in a single write. `eprintln!` writes a line
+/// in pieces (stderr is unbuffered), and mpirun forwards each rank's stderr in the pieces it
+/// reads, so a line of one rank could be split by another's output or mpirun's own.
+pub fn print_warning(message: impl std::fmt::Display) {
+    print_line("warning", message);
+}
+
+fn print_line(kind: &str, message: impl std::fmt::Display) {
+    use std::io::Write as _;
+    let line = format!("mortar: {kind}: {message}\n");
+    let _ = std::io::stderr().write_all(line.as_bytes());
+}

@@ -20,6 +20,7 @@ use mpi::collective::{CommunicatorCollectives, Root, SystemOperation};
 use mpi::topology::{Communicator, SimpleCommunicator};
 
 use mortar::case::Scene;
+use mortar::error::{print_error, print_warning};
 use mortar::petsc::Petsc;
 use mortar::solver::{run, RunOptions};
 use mortar::study::Study;
@@ -94,7 +95,7 @@ fn main() -> ExitCode {
     let args = match pull_our_options(&args) {
         Ok(a) => a,
         Err(msg) => {
-            eprintln!("mortar: error: {msg}");
+            print_error(msg);
             return ExitCode::FAILURE;
         }
     };
@@ -106,7 +107,7 @@ fn main() -> ExitCode {
             return ExitCode::SUCCESS;
         }
         Err(e) => {
-            eprintln!("mortar: error: {}", clap_one_line(&e));
+            print_error(format_args!("{}", clap_one_line(&e)));
             return ExitCode::FAILURE;
         }
     };
@@ -114,7 +115,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(Error::Reported) => ExitCode::FAILURE,
         Err(e) => {
-            eprintln!("mortar: error: {e}");
+            print_error(e);
             ExitCode::FAILURE
         }
     }
@@ -389,7 +390,7 @@ fn abort_unless_collective(world: &SimpleCommunicator, e: Error, rank: i32, size
     if e.is_collective() {
         return report_once(world, (rank == 0).then_some(e));
     }
-    eprintln!("mortar: error: [rank {rank}] {e}");
+    print_error(format_args!("[rank {rank}] {e}"));
     world.abort(1)
 }
 
@@ -406,7 +407,7 @@ fn finalize(mut petsc: Petsc, world: &SimpleCommunicator) -> Result<()> {
 /// rank exits non-zero and would otherwise lose the line of a slower rank.
 fn report_once(world: &SimpleCommunicator, message: Option<Error>) -> Error {
     if let Some(e) = message {
-        eprintln!("mortar: error: {e}");
+        print_error(e);
     }
     world.barrier();
     Error::Reported
@@ -424,11 +425,11 @@ fn ranked(e: Error, rank: i32, size: i32) -> Error {
 fn warn_unused_options(petsc: &Petsc) {
     match petsc.unused_options() {
         Ok(0) => {}
-        Ok(n) => eprintln!(
-            "mortar: warning: {n} PETSc option(s) were never used (a typo?); \
+        Ok(n) => print_warning(format_args!(
+            "{n} PETSc option(s) were never used (a typo?); \
              rerun with -options_left to list them"
-        ),
-        Err(e) => eprintln!("mortar: warning: {e}"),
+        )),
+        Err(e) => print_warning(e),
     }
 }
 

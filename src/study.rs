@@ -173,7 +173,7 @@ use mpi::topology::Communicator;
 use serde::Deserialize;
 
 use crate::case::Scene;
-use crate::error::{Error, Result};
+use crate::error::{print_warning, Error, Result};
 use crate::io::case_file::one_line;
 use crate::io::output::{read_csv, write_atomic, Summary};
 use crate::io::plot;
@@ -895,12 +895,12 @@ impl Study {
             }
             let unread = unread.unwrap_or_default();
             if rank == 0 && !unread.is_empty() {
-                eprintln!(
-                    "mortar: warning: variant '{}': PETSc option(s) {} not used by any of its \
+                print_warning(format_args!(
+                    "variant '{}': PETSc option(s) {} not used by any of its \
                      runs (a typo, or an option of a solver not in use)",
                     variant.name,
                     unread.into_iter().collect::<Vec<_>>().join(", ")
-                );
+                ));
             }
         }
         // With `finest_reference`, the metrics become errors against the finest run's.
@@ -1351,12 +1351,12 @@ impl Study {
                     .collect();
                 (rows.iter().map(point).collect(), flagged)
             } else {
-                eprintln!(
-                    "mortar: warning: curves: variant '{}' has no {} (no converged step): no \
+                print_warning(format_args!(
+                    "curves: variant '{}' has no {} (no converged step): no \
                      curve",
                     v.name,
                     history.display()
-                );
+                ));
                 (Vec::new(), Vec::new())
             };
             let stopped = Summary::read(&run_dir.join("summary.json"))

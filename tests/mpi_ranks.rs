@@ -93,7 +93,9 @@ fn a_rank_local_failure_aborts_instead_of_hanging() {
     let out = common::run_raw(&case, 2, &out_dir, &["-q"]);
     assert_ne!(out.status.code(), Some(0));
     assert_ne!(out.status.code(), Some(110), "timed out");
-    assert!(t.elapsed().as_secs() < 60);
+    // Well inside mpirun's `--timeout` of 300 s, with room for a loaded CI host.
+    let secs = t.elapsed().as_secs();
+    assert!(secs < 150, "took {secs} s");
     let lines = error_lines(&out);
     assert_eq!(lines.len(), 1, "{lines:?}");
     assert!(lines[0].contains("[rank 1]"), "{}", lines[0]);

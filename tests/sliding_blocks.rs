@@ -169,12 +169,17 @@ fn newton_converges_quadratically_within_8_iterations() {
 /// the law's inputs from the residual's weights: the last step started with a node on the
 /// Coulomb cone that the tangent's own weights (round-off apart) put 1.25e-10 inside it, stick,
 /// on one rank and not on the other: 6 and 9 iterations in that step. Both take 9 now.
+///
+/// One iteration of slack per step: MUMPS's dynamic scheduling on two ranks changes the
+/// round-off from one run to the next, and a residual norm at the tolerance may then take one
+/// more iteration. A tangent that parts the paths again (the 3 iterations above, or the 7
+/// against 22 of an earlier round) still fails.
 #[test]
 #[cfg_attr(
     debug_assertions,
     ignore = "release only: cargo test --release --test sliding_blocks"
 )]
-fn refined_blocks_take_one_newton_path_on_1_and_2_ranks() {
+fn refined_blocks_take_one_newton_path_on_1_and_2_ranks_within_an_iteration() {
     let text =
         common::scene_text("scaling").replacen("[steps]\n", "[steps]\npredictor = false\n", 1);
     assert!(text.contains("predictor = false"));
@@ -189,5 +194,13 @@ fn refined_blocks_take_one_newton_path_on_1_and_2_ranks() {
             .collect()
     };
     let (one, two) = (steps(1), steps(2));
-    assert_eq!(one, two, "Newton iterations per step on 1 and 2 ranks");
+    assert_eq!(
+        one.len(),
+        two.len(),
+        "steps on 1 and 2 ranks: {one:?} {two:?}"
+    );
+    assert!(
+        one.iter().zip(&two).all(|(a, b)| a.abs_diff(*b) <= 1),
+        "Newton iterations per step on 1 and 2 ranks: {one:?} {two:?}"
+    );
 }

@@ -438,11 +438,11 @@ fn check_coverage(
     }
     let total: f64 = secondary.iter().map(|&f| face_area(scene, f)).sum();
     if tied < 0.9 * total && world.rank() == 0 {
-        eprintln!(
-            "mortar: warning: interface '{}': only {:.1} % of '{side}' is tied",
+        crate::error::print_warning(format_args!(
+            "interface '{}': only {:.1} % of '{side}' is tied",
             iface.name,
             100.0 * tied / total
-        );
+        ));
     }
     Ok(())
 }

@@ -189,7 +189,7 @@ fn write_loglog(
 /// Prints the warnings of a plot writer on stderr, one line each.
 pub fn print_warnings(warnings: Vec<String>) {
     for w in warnings {
-        eprintln!("mortar: warning: {w}");
+        crate::error::print_warning(w);
     }
 }
 

@@ -205,10 +205,10 @@ impl Drop for Petsc {
         // Drop; print it rather than lose it.
         let code = unsafe { p::PetscFinalize() };
         if code != 0 {
-            eprintln!(
-                "mortar: warning: PetscFinalize returned error code {code}: what PETSc writes at \
+            crate::error::print_warning(format_args!(
+                "PetscFinalize returned error code {code}: what PETSc writes at \
                  the end of a run (a -log_view file, say) may be missing"
-            );
+            ));
         }
         // `universe` drops after this, calling MPI_Finalize.
     }

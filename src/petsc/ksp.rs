@@ -60,7 +60,7 @@ impl Drop for Ksp {
         // SAFETY: `raw` is a valid KSP owned by this struct.
         let code = unsafe { p::KSPDestroy(&mut self.raw) };
         if code != 0 {
-            eprintln!("warning: KSPDestroy returned error code {code}");
+            crate::error::print_warning(format_args!("KSPDestroy returned error code {code}"));
         }
     }
 }

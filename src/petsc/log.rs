@@ -41,7 +41,9 @@ impl Drop for StageGuard {
         // SAFETY: paired with the push in `Stage::push`.
         let code = unsafe { p::PetscLogStagePop() };
         if code != 0 {
-            eprintln!("warning: PetscLogStagePop returned error code {code}");
+            crate::error::print_warning(format_args!(
+                "PetscLogStagePop returned error code {code}"
+            ));
         }
     }
 }

@@ -264,7 +264,7 @@ impl Drop for Matrix {
         // SAFETY: `raw` is a valid Mat we hold a reference to.
         let code = unsafe { p::MatDestroy(&mut self.raw) };
         if code != 0 {
-            eprintln!("warning: MatDestroy returned error code {code}");
+            crate::error::print_warning(format_args!("MatDestroy returned error code {code}"));
         }
     }
 }

@@ -132,10 +132,10 @@ impl Drop for Override {
                 None => chk!(PetscOptionsClearValue(std::ptr::null_mut(), name.as_ptr())),
             };
             if let Err(e) = restored {
-                eprintln!(
-                    "mortar: warning: could not restore PETSc option {}: {e}",
+                crate::error::print_warning(format_args!(
+                    "could not restore PETSc option {}: {e}",
                     name.to_string_lossy()
-                );
+                ));
             }
         }
     }

@@ -18,7 +18,8 @@
 //!   on more than one rank the off-diagonal block loses its column map), so a later
 //!   [`Matrix::with_owned_rows`] before that assembly adds everything through `MatSetValues`.
 //! - The arrays are handed back on drop, so also on an error or a panic in the closure.
-//! - Checked against `MatSetValues` bit for bit on one and two ranks (`tests/petsc_layer.rs`).
+//! - Checked against `MatSetValues` bit for bit on one and two ranks (`tests/petsc_layer.rs`,
+//!   `tests/petsc_layer_two_ranks.rs`).
 //! - The sums are those of `MatSetValues` bit for bit: each stored entry receives the same
 //!   additions in the same order.
 //! - Matrices of other types (none are made here, but an option could make one) take the plain
@@ -292,7 +293,9 @@ impl Drop for HeldBlock {
             ]
         };
         if codes.iter().any(|&c| c != 0) {
-            eprintln!("warning: handing a matrix block back to PETSc failed: {codes:?}");
+            crate::error::print_warning(format_args!(
+                "handing a matrix block back to PETSc failed: {codes:?}"
+            ));
         }
     }
 }

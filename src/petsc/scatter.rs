@@ -57,7 +57,9 @@ impl Drop for Scatter {
         // SAFETY: `raw` is a valid VecScatter owned by this struct.
         let code = unsafe { p::VecScatterDestroy(&mut self.raw) };
         if code != 0 {
-            eprintln!("warning: VecScatterDestroy returned error code {code}");
+            crate::error::print_warning(format_args!(
+                "VecScatterDestroy returned error code {code}"
+            ));
         }
     }
 }

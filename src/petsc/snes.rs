@@ -383,7 +383,7 @@ impl Drop for Snes {
         // SAFETY: `raw` is a valid SNES owned by this struct.
         let code = unsafe { p::SNESDestroy(&mut self.raw) };
         if code != 0 {
-            eprintln!("warning: SNESDestroy returned error code {code}");
+            crate::error::print_warning(format_args!("SNESDestroy returned error code {code}"));
         }
     }
 }

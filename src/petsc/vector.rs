@@ -187,7 +187,7 @@ impl Drop for Vector {
         // Drop; report it rather than swallow it.
         let code = unsafe { p::VecDestroy(&mut self.raw) };
         if code != 0 {
-            eprintln!("warning: VecDestroy returned error code {code}");
+            crate::error::print_warning(format_args!("VecDestroy returned error code {code}"));
         }
     }
 }

@@ -38,7 +38,7 @@ use crate::case::Scene;
 use crate::contact::frictional::ContactInterfaces;
 use crate::contact::tying::{Augmented, TiedInterfaces};
 use crate::dofs::DofMap;
-use crate::error::{Error, Result};
+use crate::error::{print_error, print_warning, Error, Result};
 use crate::io::output::{StepRecord, Summary};
 use crate::petsc::log::Phases;
 use crate::petsc::snes::Tolerances;
@@ -365,15 +365,15 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                     Augmented::CapReached => {
                         uzawa_capped += 1;
                         if rank == 0 {
-                            eprintln!(
-                                "mortar: warning: step {} (load {}): an interface is still \
+                            print_warning(format_args!(
+                                "step {} (load {}): an interface is still \
                                  above its Uzawa tolerances after uzawa_max = {augmentations} \
                                  augmentations (tied relative gap {:.3e}; contact: \
                                  {violation:.3e} times the tolerance)",
                                 step + 1,
                                 Load(t_new),
                                 model.tying.max_relative_gap(&s.u, &world)
-                            );
+                            ));
                         }
                         break outcome;
                     }
@@ -631,7 +631,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
     })();
     match stepping {
         Err(e) if ranks > 1 && !e.is_collective() => {
-            eprintln!("mortar: error: [rank {rank}] {e}");
+            print_error(format_args!("[rank {rank}] {e}"));
             world.abort(1)
         }
         other => other,
