@@ -78,14 +78,16 @@ impl Error {
     }
 }
 
-/// Prints `mortar: error: {message}` on stderr (see [`print_warning`]).
+/// Prints `mortar: error: {message}` and a newline on stderr in a single write. `eprintln!`
+/// writes a line in pieces (stderr is unbuffered), and mpirun forwards each rank's stderr in
+/// the pieces it reads, so a line of one rank could be split by another's output or mpirun's
+/// own.
 pub fn print_error(message: impl std::fmt::Display) {
     print_line("error", message);
 }
 
-/// Prints `mortar: warning: {message}` on stderr in a single write. `eprintln!` writes a line
-/// in pieces (stderr is unbuffered), and mpirun forwards each rank's stderr in the pieces it
-/// reads, so a line of one rank could be split by another's output or mpirun's own.
+/// Prints `mortar: warning: {message}` and a newline on stderr in a single write, as
+/// [`print_error`].
 pub fn print_warning(message: impl std::fmt::Display) {
     print_line("warning", message);
 }
