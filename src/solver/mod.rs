@@ -724,10 +724,9 @@ enum NewtonTangent {
 /// With `steps.predictor_tangent = "last_newton"` (the default) the solve reuses the
 /// factorization of the last step's last Newton iteration, `K(x_n^(k-1))`, as PETSc's linear
 /// solver still holds it (the matrix is untouched since, so nothing is refactorized): no
-/// assembly and no
-/// factorization, a prediction that differs from the consistent one by the effect of the last
-/// Newton correction on the tangent. It is used only when that factorization is one of the
-/// last step's converged Newton solve ([`NewtonTangent`]).
+/// assembly and no factorization, a prediction that differs from the consistent one by the
+/// effect of the last Newton correction on the tangent. It is used only when that
+/// factorization is one of the last step's converged Newton solve ([`NewtonTangent`]).
 struct Predictor<'a> {
     scene: &'a Scene,
     dofs: &'a DofMap,

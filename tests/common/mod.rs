@@ -28,22 +28,23 @@ pub fn with_pallets(text: &str, split: &str) -> String {
     out
 }
 
+/// The folder of the shipped scene `cases/<scene>`.
+fn scene_dir(scene: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("cases")
+        .join(scene)
+}
+
 /// The case text of the shipped scene `cases/<scene>`.
 pub fn scene_text(scene: &str) -> String {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("cases")
-        .join(scene);
-    std::fs::read_to_string(path.join("case.toml")).unwrap()
+    std::fs::read_to_string(scene_dir(scene).join("case.toml")).unwrap()
 }
 
 /// Writes `text` (a shipped scene's case, edited) as `case.toml` into a fresh folder named
 /// `name`, with the scene's PETSc options file beside it, and returns its path.
 pub fn write_scene_copy(name: &str, scene: &str, text: &str) -> PathBuf {
     let case = write_case(name, text);
-    let options = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("cases")
-        .join(scene)
-        .join("petscrc");
+    let options = scene_dir(scene).join("petscrc");
     std::fs::copy(options, case.with_file_name("petscrc")).unwrap();
     case
 }
