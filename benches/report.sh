@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Runs the assembly and Newton benchmarks and prints a compact table of the results.
+# Runs the benchmarks (bulk assembly, Newton steps, contact search, mortar pair integration)
+# and prints one compact table of the results.
 #
 #   benches/report.sh [CRITERION OPTIONS...]
 #
@@ -7,10 +8,11 @@
 # `benches/report.sh hex8`. Criterion's own output goes to stderr; the table goes to stdout.
 #
 # Columns: the time of one benchmark iteration (criterion's estimate: the slope of the linear
-# fit if it has one, else the mean, with its 95% interval); for the assembly benchmarks the
-# throughput in elements per second and the time per element; for the Newton-step benchmarks
-# the Newton iterations of the step (the `newton-its` lines the bench prints) and the time per
-# Newton iteration (step time / iterations, everything in the step included).
+# fit if it has one, else the mean, with its 95% interval); where a benchmark counts items
+# (criterion's throughput: elements for the assembly, secondary segments for the search, face
+# pairs for the mortar kernels) the items per second and the time per item; for the Newton-step
+# benchmarks the Newton iterations of the step (the `newton-its` lines the bench prints) and the
+# time per Newton iteration (step time / iterations, everything in the step included).
 #
 # Only the benchmarks run by this invocation are listed (read from
 # target/criterion/<id>/new/{benchmark,estimates}.json).
@@ -60,8 +62,8 @@ def fmt_time(ns):
 def fmt_rate(per_s):
     for unit, scale in (("G", 1e9), ("M", 1e6), ("k", 1e3)):
         if per_s >= scale:
-            return f"{per_s / scale:.3g} {unit}elem/s"
-    return f"{per_s:.3g} elem/s"
+            return f"{per_s / scale:.3g} {unit}/s"
+    return f"{per_s:.3g} /s"
 
 
 rows = []
@@ -86,7 +88,7 @@ for full_id in ran:
 
 if not rows:
     sys.exit("report.sh: no benchmark results found in this run")
-header = ["benchmark", "time/iter", "95% interval", "throughput", "time/elem", "newton its",
+header = ["benchmark", "time/iter", "95% interval", "items/s", "time/item", "newton its",
           "time/newton it"]
 widths = [max(len(r[i]) for r in rows + [header]) for i in range(len(header))]
 for r in [header, ["-" * w for w in widths]] + rows:

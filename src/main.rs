@@ -23,7 +23,7 @@ use mortar::case::Scene;
 use mortar::error::{print_error, print_warning};
 use mortar::petsc::Petsc;
 use mortar::solver::{run, RunOptions};
-use mortar::study::Study;
+use mortar::study::{Study, StudyReport};
 use mortar::{Error, Result};
 
 #[derive(Parser, Debug)]
@@ -265,7 +265,7 @@ fn run_command(
                         quiet,
                     },
                 )?;
-                check_expectations(&world, &study.expectations, &report.summary.metrics)
+                study_verdict(&world, &study, report)
             }
             None => Ok(()),
         };
@@ -330,15 +330,24 @@ fn study_command(
     let out_dir = out.unwrap_or_else(|| default_out(&study.name));
     let result = study
         .run(&petsc, &RunOptions { out_dir, quiet })
-        .and_then(|report| {
-            check_expectations(&world, &study.expectations, &report.summary.metrics)
-        });
+        .and_then(|report| study_verdict(&world, &study, report));
     if rank == 0 {
         warn_unused_options(&petsc);
     }
     match result {
         Ok(_) => finalize(petsc, &world),
         Err(e) => Err(abort_unless_collective(&world, e, rank, size)),
+    }
+}
+
+/// A finished study's verdict: its expectations are printed with their values also when runs
+/// failed (measured on the runs that converged: a failed run has no metrics); the failed runs'
+/// error comes first, then the expectations'.
+fn study_verdict(world: &SimpleCommunicator, study: &Study, report: StudyReport) -> Result<()> {
+    let expected = check_expectations(world, &study.expectations, &report.summary.metrics);
+    match report.failure {
+        Some(failure) => Err(failure),
+        None => expected,
     }
 }
 

@@ -12,7 +12,7 @@
 //! metric = "energy_error"            # the summary metric measured against h
 //! title = "Thick sphere"             # plot title (optional)
 //!
-//! [[refinement]]                     # at least 2 (at least 1 with [curves])
+//! [[refinement]]                     # at least 1 (2 or more for a slope)
 //! h = 0.5                            # mesh size for the x axis
 //! set = { "mesh.0.n_circ" = 2, "mesh.0.n_rad" = 2 }
 //!
@@ -111,7 +111,7 @@
 //! checked against the first run's `history.csv`, so a misspelt one stops the study after one
 //! run.
 //!
-//! # Outputs (in `--out DIR`, default `out/<study file stem>`; written by rank 0)
+//! # Outputs (in `--out DIR`, default `out/<study name>`; written by rank 0)
 //!
 //! - `runs/<variant>/<level>/`: each run's own outputs (`level` = index of the refinement). With
 //!   `[curves]`, a `history.csv` left there by an earlier study is removed before the run.
@@ -125,10 +125,17 @@
 //!   `VmHWM`, reset before each run; the runs share one process, so before each run the
 //!   memory the earlier ones freed goes back to the OS, [`Petsc::release_free_memory`], or a
 //!   run after a larger one would report that one's peak), `on_front` (see below).
-//! - `summary.json` ([`Summary`]): `case` = the study name (the study file's stem), `converged` =
+//! - `summary.json` ([`Summary`]): `case` = the study name (the study file's folder and stem,
+//!   `contact_patch_study` for `cases/contact_patch/study.toml`: the studies of one scene, and
+//!   the `study.toml` of every scene, get folders of their own), `converged` =
 //!   every run converged, `metrics`: `slope_<variant>` (least-squares slope of log(error)
 //!   against log(h) over the variant's converged runs, when there are two or more) and
-//!   `error_<variant>_<level>`, plus `failed_runs`, with `finest_reference` the values
+//!   `error_<variant>_<level>`; for every converged run, each metric of its own
+//!   `summary.json` as `<metric>_<variant>_<level>` (`max_newton_its_case1_0`,
+//!   `max_augmentations_per_step_case1_0`, `rel_error_peak_pressure_hex20_2`, ...), its wall
+//!   time `seconds_<variant>_<level>` and its peak memory `peak_memory_mb_<variant>_<level>`,
+//!   so that expectations can bound them (`max_newton_its_* <= 8`); plus `failed_runs`, with
+//!   `finest_reference` the values
 //!   `value_<variant>_<level>`, and with `[curves]`
 //!   `curve_max_rel_diff_<variant>` and `smoothness_<variant>` (see above, added once every
 //!   run is done); `timings.total`;
@@ -156,14 +163,15 @@
 //!
 //! A failed run (not converged, a bad value of a PETSc option the options database checks,
 //! ...) is recorded (`converged = false`, no point on the convergence plot) and the study goes
-//! on; when any failed, the study returns an error after writing everything, unless every
+//! on; when any failed, the study fails after writing everything and printing its
+//! expectations (checked on what the other runs measured: [`StudyReport::failure`]), unless every
 //! failed run belongs to a variant with `may_fail = true` (a baseline expected to break). A
 //! metric missing from a converged run's summary stops the study: it would be missing from
 //! every run. So does an error that need not reach every rank alike (an error PETSc raises
 //! inside a solve, such as a factorization package it does not have; I/O): the message names
 //! the variant and level.
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -194,8 +202,9 @@ pub struct StudyFile {
     /// Plot title (of both plots). Default: `<scene name>: <metric>` for the convergence plot,
     /// `<scene name>: <y label>` for the curves.
     pub title: Option<String>,
-    /// Mesh refinements, at least 2 (for a slope), each with its mesh size; with `[curves]`, at
-    /// least 1.
+    /// Mesh refinements, at least 1, each with its mesh size: 2 or more give each variant a
+    /// convergence slope and the convergence plot; 1 is a sweep of the variants on one mesh
+    /// (the Pareto front and the expectations work alike).
     #[serde(default)]
     pub refinement: Vec<RefinementSpec>,
     /// Variants (element types, schemes, ...), at least 1: each is run at every refinement.
@@ -374,7 +383,8 @@ impl VariantSpec {
 /// A validated study.
 #[derive(Clone, Debug)]
 pub struct Study {
-    /// Study name (the study file's stem): `case` in its summary, the default output folder.
+    /// Study name, `<folder>_<stem>` of the study file (`hertz_study` for
+    /// `cases/hertz/study.toml`): `case` in its summary, the default output folder.
     pub name: String,
     /// The study file.
     pub file: PathBuf,
@@ -453,14 +463,20 @@ pub struct RunRecord {
     pub on_front: bool,
     /// Why the run failed.
     pub message: Option<String>,
+    /// The metrics of the run's own `summary.json`, for a converged run; on rank 0 only (the
+    /// study summary is rank 0's).
+    pub metrics: BTreeMap<String, f64>,
 }
 
 /// What a study did.
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub struct StudyReport {
     pub runs: Vec<RunRecord>,
     /// The study summary (also in `summary.json`).
     pub summary: Summary,
+    /// Runs failed that were not allowed to (`may_fail`): the study is done and written, and
+    /// fails with this error once its expectations are printed.
+    pub failure: Option<Error>,
 }
 
 impl Study {
@@ -473,20 +489,10 @@ impl Study {
         };
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         let file: StudyFile = toml::from_str(&text).map_err(|e| err(one_line(&e.to_string())))?;
-        let name = path
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "study".into());
+        let name = study_name(path);
         let metric_parts = file.metric.names();
         if metric_parts.is_empty() || metric_parts.iter().any(|m| m.trim().is_empty()) {
             return Err(err("metric: empty".into()));
-        }
-        if file.curves.is_none() && file.refinement.len() < 2 {
-            return Err(err(format!(
-                "refinement: at least 2 are needed for a slope, found {} (a study with [curves] \
-                 may have 1)",
-                file.refinement.len()
-            )));
         }
         if !(file.error_floor.is_finite() && file.error_floor >= 0.0) {
             return Err(err(format!(
@@ -836,6 +842,7 @@ impl Study {
                     converged: false,
                     on_front: false,
                     message: None,
+                    metrics: BTreeMap::new(),
                 };
                 match result {
                     None => {}
@@ -850,6 +857,7 @@ impl Study {
                             Ok(e) if e.is_finite() => {
                                 record.error = Some(e);
                                 record.converged = true;
+                                record.metrics = s.metrics;
                             }
                             Ok(e) => {
                                 record.message = Some(format!("{} = {e}", self.metric));
@@ -1033,7 +1041,7 @@ impl Study {
                 .any(|v| v.name == r.variant && v.may_fail)
         };
         let unexpected = runs.iter().filter(|r| !r.converged && !may_fail(r)).count();
-        if unexpected > 0 {
+        let failure = (unexpected > 0).then(|| {
             let first =
                 runs.iter()
                     .find(|r| !r.converged && !may_fail(r))
@@ -1045,13 +1053,17 @@ impl Study {
                             r.message.as_deref().unwrap_or("not converged")
                         )
                     });
-            return Err(Error::Solve(format!(
+            Error::Solve(format!(
                 "study {}: {unexpected} of {total} runs failed (see {}){first}",
                 self.name,
                 out.join("study.csv").display()
-            )));
-        }
-        Ok(StudyReport { runs, summary })
+            ))
+        });
+        Ok(StudyReport {
+            runs,
+            summary,
+            failure,
+        })
     }
 
     /// The level of the finest refinement (the smallest h).
@@ -1415,6 +1427,18 @@ impl Study {
                 s.metrics
                     .insert(format!("error_{}_{}", r.variant, r.level), e);
             }
+            if r.converged {
+                let own = r.metrics.iter().map(|(k, v)| (k.as_str(), *v));
+                let measured = [
+                    ("seconds", Some(r.seconds)),
+                    ("peak_memory_mb", r.peak_memory_mb),
+                ];
+                let measured = measured.into_iter().filter_map(|(k, v)| Some((k, v?)));
+                for (name, value) in own.chain(measured).filter(|(_, v)| v.is_finite()) {
+                    s.metrics
+                        .insert(format!("{name}_{}_{}", r.variant, r.level), value);
+                }
+            }
         }
         let failed: Vec<String> = runs
             .iter()
@@ -1754,6 +1778,23 @@ pub fn pareto_front(runs: &[RunRecord], ties: Ties) -> Vec<usize> {
         .collect()
 }
 
+/// A study's name: the study file's folder and stem, `<folder>_<stem>`
+/// (`cases/sliding_blocks/study_quadrature.toml` is `sliding_blocks_study_quadrature`), or the
+/// stem alone for a file without a named folder. The folder keeps the default output folders
+/// (`out/<name>`) of different scenes' `study.toml` apart.
+fn study_name(path: &Path) -> String {
+    let stem = path
+        .file_stem()
+        .map_or_else(|| "study".into(), |s| s.to_string_lossy().into_owned());
+    let folder = std::path::absolute(path)
+        .ok()
+        .and_then(|p| Some(p.parent()?.file_name()?.to_string_lossy().into_owned()));
+    match folder {
+        Some(folder) => format!("{folder}_{stem}"),
+        None => stem,
+    }
+}
+
 /// Resets the process's peak resident memory (`VmHWM`), where Linux allows it
 /// (`/proc/self/clear_refs`, value 5); otherwise the peak read after a run is the process's.
 fn reset_peak_memory() {
@@ -1923,11 +1964,23 @@ mod tests {
             converged,
             on_front: false,
             message: None,
+            metrics: BTreeMap::new(),
         }
     }
 
     /// A study file that says nothing of them: errors within 1e-9 relative are equal, exact
     /// times only, one run each.
+    #[test]
+    fn study_names_carry_their_folder() {
+        let name = |p: &str| study_name(Path::new(p));
+        assert_eq!(name("cases/hertz/study.toml"), "hertz_study");
+        assert_eq!(
+            name("/x/sliding_blocks/study_uzawa.toml"),
+            "sliding_blocks_study_uzawa"
+        );
+        assert_eq!(name("/study.toml"), "study");
+    }
+
     #[test]
     fn study_file_defaults() {
         let file: StudyFile = toml::from_str("case = \"case.toml\"\nmetric = \"e\"\n").unwrap();
@@ -2157,6 +2210,7 @@ count = 1
             converged: true,
             on_front: true,
             message: None,
+            metrics: BTreeMap::new(),
         };
         let failed = RunRecord {
             error: None,

@@ -80,8 +80,11 @@ fn extremes(full: bool) -> Vec<Extreme> {
     if full {
         cases.extend([
             ("penalty 1e1 E/h", penalty("10.0"), true),
+            ("penalty 1e3 E/h", penalty("1e3"), false),
             ("penalty 1e4 E/h", penalty("1e4"), false),
+            ("penalty 1e5 E/h", penalty("1e5"), false),
             ("penalty 1e6 E/h", penalty("1e6"), false),
+            ("penalty 1e7 E/h", penalty("1e7"), false),
             ("mu 0", with("friction = 0.3", "friction = 0.0"), true),
             ("mu 0.5", with("friction = 0.3", "friction = 0.5"), true),
             (

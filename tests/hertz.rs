@@ -7,11 +7,16 @@
 //!   3 % of Hertz's for its own contact force (`rel_error_contact_radius` and
 //!   `rel_error_peak_pressure` of summary.json, computed by `verification.kind = "hertz"`);
 //! - the same scene on two ranks (under `mpirun --timeout`) gives the same displacements and the
-//!   same metrics as on one rank, to round-off.
+//!   same metrics as on one rank, to round-off;
+//! - at the finest refinement of the scene's study (`cases/hertz/study.toml`, its last
+//!   `[[refinement]]`, read from the file), the scene as shipped (the study's default variant)
+//!   is within 3 % of Hertz on both, as the study's expectation asks.
 
 mod common;
 
 use std::path::{Path, PathBuf};
+
+use mortar::study::set_path;
 
 /// Runs the shipped scene on `ranks` ranks into a fresh folder and returns it.
 fn run_scene(ranks: usize) -> PathBuf {
@@ -66,4 +71,33 @@ fn contact_radius_and_peak_pressure_within_3_percent_of_hertz_on_1_and_2_ranks()
             "{key}: {a} on 1 rank, {b} on 2"
         );
     }
+}
+
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "release only: cargo test --release --test hertz"
+)]
+fn finest_study_level_within_3_percent_of_hertz() {
+    let study_file = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/hertz/study.toml");
+    let study: toml::Table = toml::from_str(&std::fs::read_to_string(study_file).unwrap()).unwrap();
+    let finest = study["refinement"]
+        .as_array()
+        .and_then(|r| r.last())
+        .and_then(|r| r.get("set"))
+        .and_then(|s| s.as_table())
+        .expect("cases/hertz/study.toml: the last [[refinement]] has a set");
+    let mut case: toml::Table = toml::from_str(&common::scene_text("hertz")).unwrap();
+    for (path, value) in finest {
+        set_path(&mut case, path, value.clone()).unwrap();
+    }
+    let case = common::write_scene_copy("hertz_finest", "hertz", &case.to_string());
+    let (out, stdout) = common::run_case(&case, 1, &["-q"]);
+    let m = |k: &str| common::metric(&out, k);
+    for key in ["rel_error_contact_radius", "rel_error_peak_pressure"] {
+        let e = m(key);
+        assert!((0.0..=0.03).contains(&e), "{key} = {e}\n{stdout}");
+    }
+    // The finest level resolves more of the contact than the shipped mesh.
+    assert!(m("hertz_contact_nodes") > 20.0);
 }

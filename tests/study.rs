@@ -1,6 +1,8 @@
 //! `mortar study`: a small convergence study of the thick sphere (Hex8 and Hex20, n = 2, 3; small
-//! enough for a debug build), a study with an impossible path, a study with failing runs, and
-//! `[curves]` studies of a one-element block (reaction against prescribed displacement).
+//! enough for a debug build), a study with an impossible path, a study with failing runs,
+//! `[curves]` studies of a one-element block (reaction against prescribed displacement), a sweep
+//! on one mesh whose expectations bound each run's metrics, and the contact patch's shipped
+//! study run from its file.
 
 mod common;
 
@@ -151,7 +153,8 @@ set = { "mesh.0.element" = "hex20" }
     assert!(svg.contains("<svg"));
 
     let s = common::summary(&out);
-    assert_eq!(s["case"], "study");
+    // The study's name is its folder's and its stem's.
+    assert_eq!(s["case"], "study_thick_sphere_study");
     assert_eq!(s["converged"], true);
     assert!(s["message"].is_null());
     let metric = |k: &str| {
@@ -309,7 +312,8 @@ set = { "mesh.0.elemnt" = "hex8" }
 
 #[test]
 fn failed_runs_are_recorded_and_the_study_goes_on() {
-    // "stuck": one Newton iteration allowed, a tolerance no iteration meets, no cuts.
+    // "stuck": one Newton iteration allowed, a tolerance no iteration meets, no cuts. The
+    // expectations are still checked and printed, on what the runs that converged measured.
     let dir = study_dir(
         "study_failed_runs",
         &small_study(
@@ -322,12 +326,26 @@ set = { "mesh.0.element" = "hex8", "newton.max_it" = 1, "newton.rtol" = 1e-30, "
 name = "hex8"
 set = { "mesh.0.element" = "hex8" }
 "#,
+        )
+        .replace(
+            "title = ",
+            "expect = [\"slope_hex8 >= 0.5\", \"slope_stuck >= 0.5\"]\ntitle = ",
         ),
     );
     let o = run_study(&dir, &["-q"]);
     let (stdout, stderr) = (text(&o.stdout), text(&o.stderr));
     assert!(!o.status.success(), "{stdout}");
-    assert!(stdout.is_empty(), "-q: {stdout}");
+    // -q: only the expectations.
+    let printed: Vec<&str> = stdout.lines().collect();
+    assert_eq!(printed.len(), 2, "{stdout}");
+    assert!(
+        printed[0].contains("expect slope_hex8 >= 0.5: slope_hex8 = ")
+            && printed[0].ends_with("-> ok")
+    );
+    assert!(
+        printed[1].ends_with("expect slope_stuck >= 0.5: no such metric -> FAILED"),
+        "{stdout}"
+    );
     let lines: Vec<&str> = stderr.lines().collect();
     assert_eq!(lines.len(), 1, "{stderr}");
     assert!(
@@ -608,8 +626,73 @@ fn bad_curve_column_stops_the_study_after_one_run() {
     assert!(!out.join("runs/stiff").exists(), "no run after the first");
 }
 
+/// A sweep on one mesh (no `[curves]`, one refinement): no slope and no convergence plot, but
+/// the Pareto plot and `study.csv`; every converged run's own metrics, wall time and peak
+/// memory reach the study summary as `<metric>_<variant>_<level>`, where expectations bound
+/// them (a bound one run breaks fails the study, naming that run's value).
 #[test]
-fn one_refinement_needs_curves_and_curves_keys_are_checked() {
+fn a_sweep_on_one_mesh_bounds_each_runs_metrics() {
+    let study = block_study(ONE_REFINEMENT, "", "");
+    let sweep = |expect: &str| {
+        let mut s = study[..study.find("[curves]").unwrap()].to_string();
+        s.insert_str(
+            s.find("[[refinement]]").unwrap(),
+            &format!("expect = {expect}\n"),
+        );
+        s
+    };
+    let dir = block_study_dir(
+        "study_one_mesh",
+        &sweep(r#"["max_newton_its_* <= 8", "peak_memory_mb_soft_0 > 0", "seconds_* > 0"]"#),
+    );
+    let o = run_study(&dir, &["-q"]);
+    let stdout = text(&o.stdout);
+    assert!(o.status.success(), "{stdout}{}", text(&o.stderr));
+    let out = dir.join("out");
+    assert_eq!(csv_rows(&out).len(), 2);
+    assert!(out.join("pareto.svg").is_file());
+    assert!(
+        !out.join("convergence.png").exists(),
+        "no convergence plot on one mesh"
+    );
+    let s = common::summary(&out);
+    let m = &s["metrics"];
+    assert!(m.get("slope_soft").is_none(), "{s}");
+    for v in ["soft", "stiff"] {
+        let its = |k: &str| {
+            m[format!("{k}_{v}_0")]
+                .as_f64()
+                .unwrap_or_else(|| panic!("{k} {s}"))
+        };
+        // The study's metric is the run's own `total_newton_its`, under both names.
+        assert_eq!(its("total_newton_its"), its("error"));
+        assert!(its("max_newton_its") >= 1.0 && its("max_newton_its") <= its("total_newton_its"));
+        assert!(its("seconds") > 0.0 && its("peak_memory_mb") > 0.0);
+    }
+    for line in [
+        "expect max_newton_its_* <= 8: max_newton_its_soft_0 = ",
+        "expect seconds_* > 0: seconds_soft_0 = ",
+    ] {
+        assert!(stdout.contains(line), "no '{line}' in:\n{stdout}");
+    }
+
+    // A bound the runs break: the study fails and names the offending value.
+    let failing = block_study_dir(
+        "study_one_mesh_failing",
+        &sweep(r#"["max_newton_its_* < 1"]"#),
+    );
+    let o = run_study(&failing, &["-q"]);
+    assert!(!o.status.success());
+    let stdout = text(&o.stdout);
+    assert!(
+        stdout.contains("expect max_newton_its_* < 1: max_newton_its_soft_0 = ")
+            && stdout.contains("-> FAILED"),
+        "{stdout}"
+    );
+}
+
+#[test]
+fn curves_keys_are_checked() {
     let expect_error = |name: &str, study: &str, parts: &[&str]| {
         let dir = block_study_dir(name, study);
         let o = run_study(&dir, &["-q"]);
@@ -622,14 +705,6 @@ fn one_refinement_needs_curves_and_curves_keys_are_checked() {
         }
         assert!(!dir.join("out").exists(), "nothing runs before validation");
     };
-    // Without [curves] a single refinement is refused (with it, the other tests run one).
-    let study = block_study(ONE_REFINEMENT, "", "");
-    let without = &study[..study.find("[curves]").unwrap()];
-    expect_error(
-        "study_curves_one_refinement",
-        without,
-        &["study.toml", "refinement: at least 2", "found 1"],
-    );
     expect_error(
         "study_curves_unknown_key",
         &block_study(ONE_REFINEMENT, "", "colour = \"red\""),
@@ -805,6 +880,61 @@ fn the_error_may_be_the_largest_of_several_metrics() {
         assert!(!o.status.success(), "{line}");
         assert_eq!(stderr.lines().count(), 1, "{stderr}");
         assert!(stderr.contains(says), "{stderr}");
+    }
+}
+
+/// The contact patch's study as shipped, from its file (about 10 s): every run converges, the
+/// CSV and both plots (PNG and SVG) are written, its expectations (every one-pass mortar
+/// variant exact to 1e-10 at every level) are printed as met, and no run on the Pareto front is
+/// beaten in both error and time by another, with the study's own ties (errors at or below its
+/// `error_floor` equal, times within its `time_noise` equal).
+#[test]
+fn shipped_contact_patch_study_runs_from_its_file() {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/contact_patch");
+    let dir = common::fresh_dir("study_contact_patch_shipped");
+    for f in ["case.toml", "petscrc", "study.toml"] {
+        std::fs::copy(scene.join(f), dir.join(f)).unwrap();
+    }
+    let o = run_study(&dir, &["-q"]);
+    let stdout = text(&o.stdout);
+    assert!(o.status.success(), "{stdout}{}", text(&o.stderr));
+    let met: Vec<&str> = stdout.lines().filter(|l| l.contains("expect ")).collect();
+    assert_eq!(met.len(), 3, "{stdout}");
+    assert!(met.iter().all(|l| l.ends_with("-> ok")), "{stdout}");
+    let out = dir.join("out");
+    for plot in ["pareto", "convergence"] {
+        for ext in ["png", "svg"] {
+            assert!(out.join(format!("{plot}.{ext}")).is_file(), "{plot}.{ext}");
+        }
+    }
+    let rows = csv_rows(&out);
+    assert_eq!(rows.len(), 12, "6 variants x 2 levels: {rows:?}");
+    assert!(rows.iter().all(|r| r["converged"] == "true"), "{rows:?}");
+    let (floor, noise) = (1e-10, 0.1);
+    let file = std::fs::read_to_string(dir.join("study.toml")).unwrap();
+    assert!(file.contains("error_floor = 1e-10") && file.contains("time_noise = 0.1"));
+    let runs: Vec<(f64, f64, bool)> = rows
+        .iter()
+        .map(|r| {
+            let value = |k: &str| r[k].parse::<f64>().unwrap();
+            (value("seconds"), value("error"), r["on_front"] == "true")
+        })
+        .collect();
+    let same_time = |a: f64, b: f64| (a - b).abs() <= noise * a.max(b);
+    let same_error = |a: f64, b: f64| a.max(b) <= floor || (a - b).abs() <= 1e-9 * a.max(b);
+    let beats = |q: (f64, f64, bool), p: (f64, f64, bool)| {
+        let (no_slower, no_worse) = (
+            q.0 <= p.0 || same_time(q.0, p.0),
+            q.1 <= p.1 || same_error(q.1, p.1),
+        );
+        let strictly = (q.0 < p.0 && !same_time(q.0, p.0)) || (q.1 < p.1 && !same_error(q.1, p.1));
+        no_slower && no_worse && strictly
+    };
+    assert!(runs.iter().any(|r| r.2), "an empty front: {rows:?}");
+    for (i, &p) in runs.iter().enumerate().filter(|(_, r)| r.2) {
+        for (j, &q) in runs.iter().enumerate() {
+            assert!(!beats(q, p), "run {j} beats run {i} on the front: {rows:?}");
+        }
     }
 }
 
