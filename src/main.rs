@@ -66,7 +66,8 @@ enum Command {
     Study {
         /// The study file (study.toml).
         study: PathBuf,
-        /// Output folder. Default: out/<study file stem>.
+        /// Output folder. Default: out/<folder>_<stem> of the study file (out/hertz_study for
+        /// cases/hertz/study.toml).
         #[arg(long)]
         out: Option<PathBuf>,
         /// No progress lines.
@@ -340,9 +341,10 @@ fn study_command(
     }
 }
 
-/// A finished study's verdict: its expectations are printed with their values also when runs
-/// failed (measured on the runs that converged: a failed run has no metrics); the failed runs'
-/// error comes first, then the expectations'.
+/// A finished study's verdict: its expectations are checked and printed with their values
+/// (stdout), also when runs failed (measured on the runs that converged: a failed run has no
+/// metrics); then the study fails with the failed runs' error if there is one (it says more
+/// than a failed expectation about a run that is not there), else with the expectations'.
 fn study_verdict(world: &SimpleCommunicator, study: &Study, report: StudyReport) -> Result<()> {
     let expected = check_expectations(world, &study.expectations, &report.summary.metrics);
     match report.failure {

@@ -463,19 +463,21 @@ pub struct RunRecord {
     pub on_front: bool,
     /// Why the run failed.
     pub message: Option<String>,
-    /// The metrics of the run's own `summary.json`, for a converged run; on rank 0 only (the
-    /// study summary is rank 0's).
+    /// The metrics of the run's own `summary.json`, for a converged run, on the ranks that ran
+    /// it (read on rank 0 only, where the study summary is made).
     pub metrics: BTreeMap<String, f64>,
 }
 
 /// What a study did.
 #[derive(Debug)]
+#[must_use = "a study whose runs failed says so in `failure`"]
 pub struct StudyReport {
     pub runs: Vec<RunRecord>,
     /// The study summary (also in `summary.json`).
     pub summary: Summary,
-    /// Runs failed that were not allowed to (`may_fail`): the study is done and written, and
-    /// fails with this error once its expectations are printed.
+    /// Runs failed that were not allowed to (`may_fail`), or the `finest_reference` run did:
+    /// the study is done and written, and fails with this error once its expectations are
+    /// printed.
     pub failure: Option<Error>,
 }
 
@@ -739,8 +741,11 @@ impl Study {
 
     /// Runs every variant at every refinement (variant by variant, coarsest refinement as
     /// listed first) and writes the study's outputs in `opts.out_dir` (see the module docs).
-    /// Progress (one line per run) on rank 0 unless `opts.quiet`. Returns an error after
-    /// writing everything if any run failed.
+    /// Progress (one line per run) on rank 0 unless `opts.quiet`. Runs that failed (and were
+    /// not allowed to), or a `finest_reference` run that failed, do not make this an error:
+    /// everything is written, and the report's [`StudyReport::failure`] holds the study's
+    /// error, for the caller to return once it has checked the expectations. An error here is
+    /// one that stopped the study (a bad path, an I/O error, a missing metric, ...).
     pub fn run(&self, petsc: &Petsc, opts: &RunOptions) -> Result<StudyReport> {
         let rank = petsc.rank();
         let say = |msg: String| {
@@ -1032,16 +1037,13 @@ impl Study {
                 out.display()
             ));
         }
-        if let Some(msg) = reference_failed {
-            return Err(Error::Solve(msg));
-        }
         let may_fail = |r: &&RunRecord| {
             self.variants
                 .iter()
                 .any(|v| v.name == r.variant && v.may_fail)
         };
         let unexpected = runs.iter().filter(|r| !r.converged && !may_fail(r)).count();
-        let failure = (unexpected > 0).then(|| {
+        let runs_failed = (unexpected > 0).then(|| {
             let first =
                 runs.iter()
                     .find(|r| !r.converged && !may_fail(r))
@@ -1059,6 +1061,8 @@ impl Study {
                 out.join("study.csv").display()
             ))
         });
+        // The reference's failure first: without it no run has an error.
+        let failure = reference_failed.map(Error::Solve).or(runs_failed);
         Ok(StudyReport {
             runs,
             summary,
@@ -1434,9 +1438,12 @@ impl Study {
                     ("peak_memory_mb", r.peak_memory_mb),
                 ];
                 let measured = measured.into_iter().filter_map(|(k, v)| Some((k, v?)));
+                // A name already taken (a study metric, or the same name made from another
+                // metric and variant: both may hold `_`) keeps its first value.
                 for (name, value) in own.chain(measured).filter(|(_, v)| v.is_finite()) {
                     s.metrics
-                        .insert(format!("{name}_{}_{}", r.variant, r.level), value);
+                        .entry(format!("{name}_{}_{}", r.variant, r.level))
+                        .or_insert(value);
                 }
             }
         }
@@ -1786,7 +1793,9 @@ fn study_name(path: &Path) -> String {
     let stem = path
         .file_stem()
         .map_or_else(|| "study".into(), |s| s.to_string_lossy().into_owned());
-    let folder = std::path::absolute(path)
+    // The real folder (`..` resolved) of the file, which exists once the study is read.
+    let folder = std::fs::canonicalize(path)
+        .or_else(|_| std::path::absolute(path))
         .ok()
         .and_then(|p| Some(p.parent()?.file_name()?.to_string_lossy().into_owned()));
     match folder {
@@ -1968,8 +1977,8 @@ mod tests {
         }
     }
 
-    /// A study file that says nothing of them: errors within 1e-9 relative are equal, exact
-    /// times only, one run each.
+    /// The default study names: the study file's folder and stem; the folder of a relative
+    /// path with `..` is the real one.
     #[test]
     fn study_names_carry_their_folder() {
         let name = |p: &str| study_name(Path::new(p));
@@ -1979,8 +1988,13 @@ mod tests {
             "sliding_blocks_study_uzawa"
         );
         assert_eq!(name("/study.toml"), "study");
+        // This file exists: `src/../src/study.rs` is in the folder `src`.
+        let up = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/../src/study.rs");
+        assert_eq!(study_name(&up), "src_study");
     }
 
+    /// A study file that says nothing of them: errors within 1e-9 relative are equal, exact
+    /// times only, one run each.
     #[test]
     fn study_file_defaults() {
         let file: StudyFile = toml::from_str("case = \"case.toml\"\nmetric = \"e\"\n").unwrap();

@@ -98,6 +98,10 @@ fn finest_study_level_within_3_percent_of_hertz() {
         let e = m(key);
         assert!((0.0..=0.03).contains(&e), "{key} = {e}\n{stdout}");
     }
-    // The finest level resolves more of the contact than the shipped mesh.
-    assert!(m("hertz_contact_nodes") > 20.0);
+    // The finest level's mesh, not the shipped one (37 pressed nodes; this level has 80).
+    assert!(
+        m("hertz_contact_nodes") >= 60.0,
+        "{}",
+        m("hertz_contact_nodes")
+    );
 }

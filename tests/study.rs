@@ -831,6 +831,88 @@ petsc = "-pc_type jacobi -ksp_rtol 1e-13 -ksp_max_it 5000 -mat_mumps_icntl_8 77"
     assert!(s["metrics"]["default_on_front"].as_f64().is_some(), "{s}");
 }
 
+/// A study on 2 ranks whose runs fail (not allowed to) still prints its expectations, once (rank
+/// 0), then fails in one error line from rank 0, and both ranks stop: no hang under
+/// `mpirun --timeout`.
+#[test]
+fn failed_runs_on_two_ranks_print_the_expectations_once() {
+    let dir = study_dir(
+        "study_failed_two_ranks",
+        r#"
+case = "case.toml"
+metric = "energy_error"
+expect = ["error_hex8_0 > 0"]
+
+[[refinement]]
+h = 0.5
+set = { "mesh.0.n_circ" = 2, "mesh.0.n_rad" = 2, "mesh.0.element" = "hex8" }
+
+[[variant]]
+name = "hex8"
+
+[[variant]]
+name = "bogus_solver"
+petsc = "-ksp_type no_such_solver"
+"#,
+    );
+    let out = dir.join("out");
+    let o = common::run_subcommand("study", &dir.join("study.toml"), 2, &out, &["-q"]);
+    let (stdout, stderr) = (text(&o.stdout), text(&o.stderr));
+    assert!(!o.status.success(), "{stdout}");
+    assert_eq!(
+        stdout
+            .matches("expect error_hex8_0 > 0: error_hex8_0 = ")
+            .count(),
+        1,
+        "{stdout}"
+    );
+    assert!(stdout.trim_end().ends_with("-> ok"), "{stdout}");
+    let errors: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("mortar: error: "))
+        .collect();
+    assert_eq!(errors.len(), 1, "{stderr}");
+    assert!(errors[0].contains("1 of 2 runs failed"), "{stderr}");
+}
+
+/// A `finest_reference` run that fails leaves no run an error: the study fails, naming it, after
+/// printing its expectations on what the other runs measured.
+#[test]
+fn a_failed_finest_reference_still_prints_the_expectations() {
+    let dir = study_dir(
+        "study_failed_reference",
+        r#"
+case = "case.toml"
+metric = "energy_error"
+finest_reference = "truth"
+expect = ["energy_error_hex8_0 > 0"]
+
+[[refinement]]
+h = 0.5
+set = { "mesh.0.n_circ" = 2, "mesh.0.n_rad" = 2, "mesh.0.element" = "hex8" }
+
+[[variant]]
+name = "hex8"
+
+[[variant]]
+name = "truth"
+petsc = "-ksp_type no_such_solver"
+"#,
+    );
+    let o = run_study(&dir, &["-q"]);
+    let stdout = text(&o.stdout);
+    let line = one_error_line(&o);
+    assert!(
+        line.contains("the finest_reference run (truth at level 0) failed"),
+        "{line}"
+    );
+    assert!(
+        stdout.contains("expect energy_error_hex8_0 > 0: energy_error_hex8_0 = ")
+            && stdout.trim_end().ends_with("-> ok"),
+        "{stdout}"
+    );
+}
+
 /// `metric` as a list: a run's error is the largest of the metrics (checked against each run's
 /// own summary); a negative `error_floor`, an `error_noise` NaN and a `time_noise` of 1 or more
 /// are refused with one line naming the key.
