@@ -831,6 +831,29 @@ petsc = "-pc_type jacobi -ksp_rtol 1e-13 -ksp_max_it 5000 -mat_mumps_icntl_8 77"
     assert!(s["metrics"]["default_on_front"].as_f64().is_some(), "{s}");
 }
 
+/// One Hex8 refinement (n = 2) of the thick sphere, the variants `hex8` (the case) and `failing`
+/// (a KSP type that does not exist: its run fails), and the study keys `keys`.
+fn study_with_a_failing_variant(keys: &str, failing: &str) -> String {
+    format!(
+        r#"
+case = "case.toml"
+metric = "energy_error"
+{keys}
+
+[[refinement]]
+h = 0.5
+set = {{ "mesh.0.n_circ" = 2, "mesh.0.n_rad" = 2, "mesh.0.element" = "hex8" }}
+
+[[variant]]
+name = "hex8"
+
+[[variant]]
+name = "{failing}"
+petsc = "-ksp_type no_such_solver"
+"#
+    )
+}
+
 /// A study on 2 ranks whose runs fail (not allowed to) still prints its expectations, once (rank
 /// 0), then fails in one error line from rank 0, and both ranks stop: no hang under
 /// `mpirun --timeout`.
@@ -838,22 +861,7 @@ petsc = "-pc_type jacobi -ksp_rtol 1e-13 -ksp_max_it 5000 -mat_mumps_icntl_8 77"
 fn failed_runs_on_two_ranks_print_the_expectations_once() {
     let dir = study_dir(
         "study_failed_two_ranks",
-        r#"
-case = "case.toml"
-metric = "energy_error"
-expect = ["error_hex8_0 > 0"]
-
-[[refinement]]
-h = 0.5
-set = { "mesh.0.n_circ" = 2, "mesh.0.n_rad" = 2, "mesh.0.element" = "hex8" }
-
-[[variant]]
-name = "hex8"
-
-[[variant]]
-name = "bogus_solver"
-petsc = "-ksp_type no_such_solver"
-"#,
+        &study_with_a_failing_variant(r#"expect = ["error_hex8_0 > 0"]"#, "bogus_solver"),
     );
     let out = dir.join("out");
     let o = common::run_subcommand("study", &dir.join("study.toml"), 2, &out, &["-q"]);
@@ -881,23 +889,10 @@ petsc = "-ksp_type no_such_solver"
 fn a_failed_finest_reference_still_prints_the_expectations() {
     let dir = study_dir(
         "study_failed_reference",
-        r#"
-case = "case.toml"
-metric = "energy_error"
-finest_reference = "truth"
-expect = ["energy_error_hex8_0 > 0"]
-
-[[refinement]]
-h = 0.5
-set = { "mesh.0.n_circ" = 2, "mesh.0.n_rad" = 2, "mesh.0.element" = "hex8" }
-
-[[variant]]
-name = "hex8"
-
-[[variant]]
-name = "truth"
-petsc = "-ksp_type no_such_solver"
-"#,
+        &study_with_a_failing_variant(
+            "finest_reference = \"truth\"\nexpect = [\"energy_error_hex8_0 > 0\"]",
+            "truth",
+        ),
     );
     let o = run_study(&dir, &["-q"]);
     let stdout = text(&o.stdout);
