@@ -1,4 +1,4 @@
-/* Values that PETSc and OpenMPI expose only as macros, and glibc's malloc_trim. No logic lives
+/* Values and calls that PETSc and OpenMPI expose only as macros, and glibc's malloc_trim. No logic lives
  * here. */
 #include <malloc.h>
 #include <petscsys.h>
@@ -9,6 +9,8 @@ MPI_Comm petsc_ffi_comm_self(void) { return MPI_COMM_SELF; }
 size_t petsc_ffi_sizeof_petscint(void) { return sizeof(PetscInt); }
 size_t petsc_ffi_sizeof_petscscalar(void) { return sizeof(PetscScalar); }
 size_t petsc_ffi_sizeof_petscreal(void) { return sizeof(PetscReal); }
+/* PetscFree, a macro: frees memory PETSc allocated for the caller (PetscOptionsGetAll's string). */
+PetscErrorCode petsc_ffi_free(void *p) { return PetscFree(p); }
 /* glibc's malloc_trim(0), for the allocator PETSc, MUMPS and Rust share: hands the free memory
  * of every arena back to the OS. */
 int petsc_ffi_malloc_trim(void) { return malloc_trim(0); }

@@ -849,10 +849,19 @@ fn build_interface(
         ));
     }
     let penalty_growth_cap = spec.penalty_growth_cap.unwrap_or(100.0);
-    if !(penalty_growth_cap >= 1.0 && penalty * penalty_growth_cap <= PENALTY_RANGE.1) {
+    let cap_key = match spec.penalty_growth_cap {
+        Some(_) => format!("{key}.penalty_growth_cap = {penalty_growth_cap}"),
+        None => format!("{key}.penalty_growth_cap (default {penalty_growth_cap})"),
+    };
+    if !(penalty_growth_cap >= 1.0 && penalty_growth_cap.is_finite()) {
+        return Err(format!("{cap_key}: must be finite and >= 1"));
+    }
+    // The cap bounds a grown penalty: it matters only when the penalty grows.
+    if penalty_growth > 1.0 && penalty * penalty_growth_cap > PENALTY_RANGE.1 {
         return Err(format!(
-            "{key}.penalty_growth_cap = {penalty_growth_cap}: must be >= 1, and penalty times \
-             it at most {:e}",
+            "{cap_key}: with penalty_growth = {penalty_growth} the penalty ({penalty:e}) may grow \
+             to {:e}, above {:e}",
+            penalty * penalty_growth_cap,
             PENALTY_RANGE.1
         ));
     }

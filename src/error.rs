@@ -13,7 +13,7 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// A case-file or study-file problem: the key (dotted path) and what is wrong with it.
-    #[error("case file {file}: {msg}")]
+    #[error("{}: {msg}", file.display())]
     Case { file: PathBuf, msg: String },
     /// A mesh problem: names the element, node or set.
     #[error("mesh: {0}")]
@@ -78,6 +78,29 @@ impl Error {
     }
 }
 
+thread_local! {
+    static CONTEXT: std::cell::RefCell<Option<String>> = const { std::cell::RefCell::new(None) };
+}
+
+/// Runs `f` with `label` (a study's "study F: variant 'v' at level 0") as the context of the
+/// errors that end the job from inside `f` without returning to the caller that would name
+/// it: one rank's own error on more than one rank ([`abort_line`]).
+pub fn with_context<R>(label: String, f: impl FnOnce() -> R) -> R {
+    let before = CONTEXT.with(|c| c.replace(Some(label)));
+    let result = f();
+    CONTEXT.with(|c| *c.borrow_mut() = before);
+    result
+}
+
+/// The line printed for one rank's own error before the job is aborted: the rank, the context
+/// ([`with_context`]) if any, and the error.
+pub fn abort_line(rank: i32, e: &Error) -> String {
+    match CONTEXT.with(|c| c.borrow().clone()) {
+        Some(label) => format!("[rank {rank}] {label}: {e}"),
+        None => format!("[rank {rank}] {e}"),
+    }
+}
+
 /// Prints `mortar: error: {message}` and a newline on stderr in a single write. `eprintln!`
 /// writes a line in pieces (stderr is unbuffered), and mpirun forwards each rank's stderr in
 /// the pieces it reads, so a line of one rank could be split by another's output or mpirun's
@@ -96,4 +119,25 @@ fn print_line(kind: &str, message: impl std::fmt::Display) {
     use std::io::Write as _;
     let line = format!("mortar: {kind}: {message}\n");
     let _ = std::io::stderr().write_all(line.as_bytes());
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn abort_lines_carry_the_context_they_were_made_in() {
+        let e = Error::Other("boom".into());
+        assert_eq!(abort_line(1, &e), "[rank 1] boom");
+        let inside = with_context("study s.toml: variant 'v' at level 2".into(), || {
+            let nested = with_context("inner".into(), || abort_line(0, &e));
+            assert_eq!(nested, "[rank 0] inner: boom");
+            abort_line(0, &e)
+        });
+        assert_eq!(
+            inside,
+            "[rank 0] study s.toml: variant 'v' at level 2: boom"
+        );
+        assert_eq!(abort_line(0, &e), "[rank 0] boom");
+    }
 }

@@ -81,7 +81,8 @@ enum Command {
     /// ranks (`-log_view :FILE`): a table of the phases' times and speedups, scaling.csv and
     /// a plot. The last line is `speedup: X` (the last run's over the first's).
     Scaling {
-        /// The `-log_view` files, the reference run (fewest ranks) first.
+        /// The `-log_view` files of one scene, by strictly increasing rank count (the
+        /// reference run, fewest ranks, first).
         #[arg(required = true, num_args = 2..)]
         logs: Vec<PathBuf>,
         /// Output folder. Default: out/scaling.
@@ -401,7 +402,7 @@ fn abort_unless_collective(world: &SimpleCommunicator, e: Error, rank: i32, size
     if e.is_collective() {
         return report_once(world, (rank == 0).then_some(e));
     }
-    print_error(format_args!("[rank {rank}] {e}"));
+    print_error(mortar::error::abort_line(rank, &e));
     world.abort(1)
 }
 

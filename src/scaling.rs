@@ -52,6 +52,9 @@ pub const PHASES: [(&str, &[&str]); 7] = [
     ("start and setup", &["Main Stage", "setup"]),
 ];
 
+/// The stages every run of `mortar run` has, contact or not (`crate::solver`).
+const SOLVER_STAGES: [&str; 4] = ["setup", "assembly", "solve", "output"];
+
 /// The phases drawn in the plot (the others are small or constant).
 const PLOTTED: [&str; 4] = [
     "linear solve",
@@ -68,7 +71,8 @@ pub struct Scaling {
 }
 
 impl Scaling {
-    /// Reads the logs (at least 2).
+    /// Reads the logs (at least 2) and checks that they are runs of one scene by `mortar run`
+    /// on strictly increasing rank counts (`Scaling::check`).
     pub fn read(logs: &[PathBuf]) -> Result<Scaling> {
         if logs.len() < 2 {
             return Err(Error::Other(format!(
@@ -80,7 +84,63 @@ impl Scaling {
             .iter()
             .map(|p| PetscLog::read(p))
             .collect::<Result<Vec<_>>>()?;
-        Ok(Scaling { runs })
+        let scaling = Scaling { runs };
+        scaling
+            .check()
+            .map_err(|(k, msg)| Error::Other(format!("{}: {msg}", logs[k].display())))?;
+        Ok(scaling)
+    }
+
+    /// The runs must be comparable, or the table would quietly show zeros and false speedups:
+    /// every log has the solver's own stages ([`SOLVER_STAGES`]: a log of `mortar run`), the
+    /// same stages as the first (the same scene; a log cut short in its stage table lacks
+    /// some), Newton iterations in all or none, and rank counts strictly increasing (the
+    /// reference, fewest ranks, first). The error gives the index of the log at fault.
+    fn check(&self) -> std::result::Result<(), (usize, String)> {
+        let first = &self.runs[0];
+        for (k, run) in self.runs.iter().enumerate() {
+            if let Some(missing) = SOLVER_STAGES.iter().find(|s| run.stage(s).is_none()) {
+                return Err((
+                    k,
+                    format!("no log stage '{missing}': not a log of `mortar run`, or cut short"),
+                ));
+            }
+            let names = |r: &PetscLog| r.stages.iter().map(|s| s.0.clone()).collect::<Vec<_>>();
+            let (mine, theirs) = (names(run), names(first));
+            if let Some(missing) = theirs
+                .iter()
+                .chain(&mine)
+                .find(|s| run.stage(s).is_none() || first.stage(s).is_none())
+            {
+                return Err((
+                    k,
+                    format!(
+                        "its log stages differ from the first log's (stage '{missing}' is in \
+                         one only): logs of one scene are needed, none cut short"
+                    ),
+                ));
+            }
+            if run.newton_iterations.is_some() != first.newton_iterations.is_some() {
+                return Err((
+                    k,
+                    "Newton iterations (SNESJacobianEval) in one log only: logs of one scene \
+                     are needed, none cut short"
+                        .into(),
+                ));
+            }
+            if k > 0 && run.ranks <= self.runs[k - 1].ranks {
+                return Err((
+                    k,
+                    format!(
+                        "a run on {} rank(s) after one on {}: give the logs by strictly \
+                         increasing rank count, the reference (fewest ranks) first",
+                        run.ranks,
+                        self.runs[k - 1].ranks
+                    ),
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// The time of `phase` (one of [`PHASES`]) in run `k`: the sum of its stages.
@@ -288,5 +348,48 @@ mod tests {
         let row = table.lines().find(|l| l.starts_with("mortar")).unwrap();
         assert!(row.ends_with(" -"), "{table}");
         assert!(!csv.to_lowercase().contains("nan") && !table.contains("NaN"));
+    }
+
+    #[test]
+    fn logs_of_different_scenes_or_rank_orders_are_refused() {
+        let stages = [
+            ("Main Stage", 1.0),
+            ("setup", 0.5),
+            ("assembly", 2.0),
+            ("solve", 6.0),
+            ("output", 0.1),
+        ];
+        let check = |runs: Vec<PetscLog>| Scaling { runs }.check();
+        assert_eq!(
+            check(vec![run(1, 10.0, &stages), run(2, 6.0, &stages)]),
+            Ok(())
+        );
+        assert_eq!(
+            check(vec![
+                run(1, 10.0, &stages),
+                run(2, 6.0, &stages),
+                run(4, 4.0, &stages)
+            ]),
+            Ok(())
+        );
+        // The same log twice, or the 2-rank run first.
+        let (k, msg) = check(vec![run(2, 6.0, &stages), run(2, 6.0, &stages)]).unwrap_err();
+        assert!(k == 1 && msg.contains("strictly increasing"), "{msg}");
+        let (k, msg) = check(vec![run(2, 6.0, &stages), run(1, 10.0, &stages)]).unwrap_err();
+        assert!(k == 1 && msg.contains("fewest ranks"), "{msg}");
+        // Not a log of `mortar run`: only PETSc's own stage.
+        let (k, msg) = check(vec![run(1, 10.0, &stages[..1]), run(2, 6.0, &stages)]).unwrap_err();
+        assert!(k == 0 && msg.contains("'setup'"), "{msg}");
+        // A contact scene against a scene without contact, either way round.
+        let contact = [&stages[..], &[("Mortar integration", 3.0)]].concat();
+        let (k, msg) = check(vec![run(1, 10.0, &contact), run(2, 6.0, &stages)]).unwrap_err();
+        assert!(k == 1 && msg.contains("'Mortar integration'"), "{msg}");
+        let (k, msg) = check(vec![run(1, 10.0, &stages), run(2, 6.0, &contact)]).unwrap_err();
+        assert!(k == 1 && msg.contains("'Mortar integration'"), "{msg}");
+        // Newton iterations in one log only.
+        let mut bare = run(2, 6.0, &stages);
+        bare.newton_iterations = None;
+        let (k, msg) = check(vec![run(1, 10.0, &stages), bare]).unwrap_err();
+        assert!(k == 1 && msg.contains("SNESJacobianEval"), "{msg}");
     }
 }

@@ -157,19 +157,25 @@
 //!   exact solution: the reference variant is the truth) it is a variant's
 //!   `curve_max_rel_diff` at the last level, and the reference is not on the plot.
 //!   The summary gets `on_front_<variant>_<level>` (1 or 0) and, for the default variant (the
-//!   first with no edits, no `petsc` and no `ranks`: the case file as it is),
-//!   `default_on_front`, the share of its runs on the front; the closing line says it.
+//!   first with no edits, no `refinement_set`, no `petsc`, no `ranks` and not
+//!   `reference_only`: the case file as it is), `default_on_front`, the share of its runs on
+//!   the front (its failed runs counted, off it; not its `finest_reference` run, the truth);
+//!   the closing line says it.
 //!   `study.csv`'s `on_front` column has the flags.
 //!
-//! A failed run (not converged, a bad value of a PETSc option the options database checks,
-//! ...) is recorded (`converged = false`, no point on the convergence plot) and the study goes
+//! A failed run (not converged, steps accepted unconverged under `steps.on_failure =
+//! "continue"`, a bad value of a PETSc option, a solver package PETSc lacks: found when the run
+//! sets up its solver, `ksp::probe_factorization`, ...) is recorded (`converged = false`, no
+//! point on the convergence plot) and the study goes
 //! on; when any failed, the study fails after writing everything and printing its
 //! expectations (checked on what the other runs measured: [`StudyReport::failure`]), unless every
 //! failed run belongs to a variant with `may_fail = true` (a baseline expected to break). A
 //! metric missing from a converged run's summary stops the study: it would be missing from
 //! every run. So does an error that need not reach every rank alike (an error PETSc raises
-//! inside a solve, such as a factorization package it does not have; I/O): the message names
-//! the variant and level.
+//! inside a solve; I/O): the message names the variant and level, also when one rank of a
+//! 2-rank run meets it and aborts the job (`error::with_context`). A run's folder
+//! `runs/<variant>/<level>/` is emptied before it runs, so that nothing of an earlier study in
+//! the same `--out` passes for this run's.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
@@ -270,7 +276,7 @@ fn default_error_noise() -> f64 {
 
 /// The study's `metric`: one name, or several whose largest absolute value is the error.
 #[derive(Debug, Clone, Deserialize)]
-#[serde(untagged)]
+#[serde(untagged, expecting = "a metric name or a list of metric names")]
 pub enum MetricSpec {
     One(String),
     Largest(Vec<String>),
@@ -811,10 +817,12 @@ impl Study {
             let mut unread: Option<BTreeSet<String>> = None;
             for (level, refinement) in self.refinements.iter().enumerate() {
                 let run_dir = out.join("runs").join(&variant.name).join(level.to_string());
-                let stale = run_dir.join("history.csv");
-                if rank == 0 && self.curves.is_some() && stale.exists() {
-                    std::fs::remove_file(&stale).map_err(|e| Error::io(&stale, e))?;
+                // A reused output folder: nothing of an earlier study's run may pass for this
+                // run's (its summary, read when this run fails, or its history and VTU files).
+                if rank == 0 && run_dir.exists() {
+                    std::fs::remove_dir_all(&run_dir).map_err(|e| Error::io(&run_dir, e))?;
                 }
+                petsc.world().barrier();
                 petsc.release_free_memory();
                 reset_peak_memory();
                 let ranks = variant.ranks.unwrap_or(job_size);
@@ -853,7 +861,13 @@ impl Study {
                     None => {}
                     Some(Ok(s)) if !s.converged => {
                         record.newton_its = s.steps.iter().map(|st| st.newton_its).sum();
-                        record.message = s.message.clone();
+                        record.message = s.message.clone().or_else(|| {
+                            let n = s.steps.iter().filter(|st| !st.converged).count();
+                            Some(format!(
+                                "{n} step(s) accepted without convergence \
+                                 (steps.on_failure = \"continue\")"
+                            ))
+                        });
                     }
                     Some(Ok(s)) => {
                         record.newton_its = s.steps.iter().map(|st| st.newton_its).sum();
@@ -1148,16 +1162,18 @@ impl Study {
     ) -> Result<(Option<Result<Summary>>, BTreeSet<String>)> {
         let ranks = self.variants[v].ranks.unwrap_or(petsc.size());
         let options = crate::petsc::options::Override::set(&self.variant_options[v])?;
-        let result = petsc.on_first_ranks(ranks, || {
-            self.scene(v, level).and_then(|scene| {
-                solver::run(
-                    &scene,
-                    petsc,
-                    &RunOptions {
-                        out_dir: run_dir.to_path_buf(),
-                        quiet: true,
-                    },
-                )
+        let result = crate::error::with_context(self.run_label(v, level), || {
+            petsc.on_first_ranks(ranks, || {
+                self.scene(v, level).and_then(|scene| {
+                    solver::run(
+                        &scene,
+                        petsc,
+                        &RunOptions {
+                            out_dir: run_dir.to_path_buf(),
+                            quiet: true,
+                        },
+                    )
+                })
             })
         });
         let unused = options.unused().into_iter().collect();
@@ -1219,11 +1235,16 @@ impl Study {
     /// An error that ends the study (one that need not reach every rank alike: a PETSc
     /// error, I/O), naming the run it came from.
     fn run_error(&self, v: usize, level: usize, e: Error) -> Error {
-        Error::Other(format!(
-            "study {}: variant '{}' at level {level}: {e}",
+        Error::Other(format!("{}: {e}", self.run_label(v, level)))
+    }
+
+    /// "study F: variant 'v' at level L", for the messages of that run.
+    fn run_label(&self, v: usize, level: usize) -> String {
+        format!(
+            "study {}: variant '{}' at level {level}",
             self.file.display(),
             self.variants[v].name
-        ))
+        )
     }
 
     /// Checks the `[curves]` columns against the `history.csv` in `run_dir` (rank 0), and
@@ -1315,12 +1336,22 @@ impl Study {
         }
         let front = runs.iter().filter(|r| r.on_front).count();
         let mut note = format!("Pareto front of {metric} against wall time: {front} run(s)");
-        let default = self.variants.iter().find(|v| v.is_default());
+        let default = self
+            .variants
+            .iter()
+            .find(|v| v.is_default())
+            .filter(|d| !self.is_reference(d));
         if let Some(d) = default {
-            // The runs with an error (not a finest_reference run, the truth).
+            // The candidates among the runs of the defaults: those with an error, and the
+            // failed ones (off the front); not the truth (a finest_reference run) nor, with
+            // [curves], the runs below the last level, which have no error to place.
+            let finest = self.refinements.len() - 1;
+            let truth = |r: &RunRecord| {
+                self.finest_reference.as_deref() == Some(r.variant.as_str()) && r.level == finest
+            };
             let mine: Vec<&RunRecord> = runs
                 .iter()
-                .filter(|r| r.variant == d.name && r.converged && r.error.is_some())
+                .filter(|r| r.variant == d.name && !truth(r) && (r.error.is_some() || !r.converged))
                 .collect();
             if !mine.is_empty() {
                 let on = mine.iter().filter(|r| r.on_front).count();
@@ -1376,7 +1407,7 @@ impl Study {
                 (Vec::new(), Vec::new())
             };
             let stopped = Summary::read(&run_dir.join("summary.json"))
-                .map(|s| !s.converged)
+                .map(|s| !s.completed)
                 .unwrap_or(true);
             series.push(plot::Series {
                 name: curve_legend(&v.name, &points, &flagged, stopped),

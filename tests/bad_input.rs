@@ -688,8 +688,18 @@ value = [0.0, 0.0, -1.0]
         ),
         check(
             "penalty_growth_cap_overflowing",
-            valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\npenalty_growth_cap = 1e300\n"),
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\npenalty_growth = 2.0\npenalty_growth_cap = 1e300\n"),
             "interface[0].penalty_growth_cap",
+        ),
+        check(
+            "penalty_growth_cap_infinite",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\npenalty_growth_cap = inf\n"),
+            "interface[0].penalty_growth_cap",
+        ),
+        check(
+            "penalty_growth_default_cap_overflowing",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\npenalty = 1e11\npenalty_growth = 2.0\n"),
+            "interface[0].penalty_growth_cap (default 100)",
         ),
         check(
             "gradient_displacement_overflowing",
@@ -723,6 +733,13 @@ value = [0.0, 0.0, -1.0]
         run("pc_type_nonsense", text(VALID), "nonsense").args(&["-pc_type", "nonsense"]),
         run("snes_rtol_nan", text(VALID), "-snes_rtol").args(&["-snes_rtol", "nan"]),
         run("snes_atol_negative", text(VALID), "-snes_atol").args(&["-snes_atol", "-1"]),
+        run("snes_max_it_negative", text(VALID), "-snes_max_it -5")
+            .args(&["-snes_max_it", "-5"]),
+        // Read by PETSc only at the first factorization; checked before the first step.
+        run("solver_package_missing", text(VALID), "pastix")
+            .args(&["-pc_factor_mat_solver_type", "pastix"]),
+        run("package_option_not_an_integer", text(VALID), "-mat_mumps_icntl_8 xyz")
+            .args(&["-mat_mumps_icntl_8", "xyz"]),
         run(
             "petscrc_bad_integer",
             valid_top(r#"petsc_options = "petscrc""#),
@@ -942,4 +959,17 @@ fn valid_scene_runs() {
             .expect("run rows have an output folder"),
     );
     assert!(nan.is_empty(), "NaN in {nan:?}");
+}
+
+/// The ends of the documented ranges are accepted: a penalty of 1e12 E/h (the top of its range)
+/// with no growth, whose growth cap then bounds nothing.
+#[test]
+fn range_ends_are_accepted() {
+    let row = check(
+        "penalty_at_the_top_of_its_range",
+        valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\npenalty = 1e12\n"),
+        "",
+    );
+    let o = execute(&row).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(o.code, Some(0), "refused: {}", o.stderr);
 }

@@ -524,3 +524,30 @@ count = 12
         );
     }
 }
+
+/// Bodies that part: the slide's upper block pressed, then lifted and moved clear of the lower
+/// one. The run completes, nothing penetrates (`max_rel_penetration_slide` is written, 0), no
+/// node has an overlap (so no `max_gap_slide`), and the tied-interface metric
+/// `max_relative_gap` is not written for a scene without tying.
+#[test]
+fn parted_bodies_keep_their_contact_metrics() {
+    let text = common::slide_case(8)
+        .replace(
+            "value = [-0.02]\ncurve = { kind = \"table\", table = [[0.0, 0.0], [0.3, 1.0], [1.0, 1.0]] }",
+            "value = [1.0]\ncurve = { kind = \"table\", table = [[0.0, 0.0], [0.3, -0.02], [0.5, 0.05], [1.0, 0.05]] }",
+        )
+        .replace(
+            "value = [0.2]\ncurve = { kind = \"table\", table = [[0.0, 0.0], [0.3, 0.0], [1.0, 1.0]] }",
+            "value = [2.0]\ncurve = { kind = \"table\", table = [[0.0, 0.0], [0.5, 0.0], [1.0, 1.0]] }",
+        );
+    assert!(text.contains("[0.5, 0.05]") && text.contains("value = [2.0]"));
+    let case = common::write_case("parted_bodies", &text);
+    let (out, _) = common::run_case(&case, 1, &["-q"]);
+    let s = common::summary(&out);
+    assert_eq!(s["converged"], true);
+    let metrics = s["metrics"].as_object().unwrap();
+    assert_eq!(common::metric(&out, "max_rel_penetration_slide"), 0.0);
+    assert!(!metrics.contains_key("max_gap_slide"), "{metrics:?}");
+    assert!(!metrics.contains_key("max_relative_gap"), "{metrics:?}");
+    assert_eq!(common::metric(&out, "pairs_slide_pairs_integrated"), 0.0);
+}

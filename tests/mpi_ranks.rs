@@ -44,21 +44,35 @@ fn error_lines(out: &std::process::Output) -> Vec<String> {
         .collect()
 }
 
-/// Bad input, a bad PETSc option and a failed solve on 2 ranks: one error line, exit non-zero,
-/// and no hang (mpirun's --timeout would give exit code 110).
+/// Bad input, bad PETSc options (also those read only at the first factorization) and a failed
+/// solve on 2 ranks: one error line, exit non-zero, and no hang (mpirun's --timeout would give exit code 110).
 #[test]
 fn collective_failures_on_two_ranks_report_once() {
     let sphere = common::thick_sphere_case("hex8", 1);
     let bad_case = sphere.replace("young = 1000.0", "young = -1.0");
     let failing = common::compressed_block_no_predictor("hex8", 0.6, 1)
         .replace("count = 1", "count = 1\nmax_cuts = 0");
-    let runs: [(&str, String, &[&str], &str); 3] = [
+    let runs: [(&str, String, &[&str], &str); 5] = [
         ("two_rank_bad_case", bad_case, &["-q"], "young"),
         (
             "two_rank_bad_option",
-            sphere,
+            sphere.clone(),
             &["-q", "-ksp_type", "nonsense"],
             "nonsense",
+        ),
+        // Options PETSc reads only at the first factorization: checked before the first step
+        // (`ksp::probe_factorization`), not met by each rank in a solve.
+        (
+            "two_rank_missing_solver_package",
+            sphere.clone(),
+            &["-q", "-pc_factor_mat_solver_type", "pastix"],
+            "pastix",
+        ),
+        (
+            "two_rank_bad_package_option",
+            sphere,
+            &["-q", "-mat_mumps_icntl_8", "xyz"],
+            "-mat_mumps_icntl_8 xyz",
         ),
         (
             "two_rank_failed_solve",

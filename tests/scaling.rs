@@ -1,7 +1,7 @@
 //! `mortar scaling`: the PETSc logs of the contact patch scene on 1 and 2 ranks give a table of
 //! every phase, `scaling.csv` whose phases add up to the logged stages, the plot, and the last
-//! line `speedup: X` (the ratio of the logged wall times); a file that is not a PETSc log is
-//! one error line naming it.
+//! line `speedup: X` (the ratio of the logged wall times); the same log twice, or a file that
+//! is not a PETSc log, is one error line.
 
 mod common;
 
@@ -101,6 +101,13 @@ fn speedup_from_the_logs_of_one_and_two_ranks() {
         );
     }
     assert!(out.join("scaling.png").is_file() && out.join("scaling.svg").is_file());
+
+    // The same log twice (no second rank count): one line naming the file at fault.
+    let o = run_scaling(&[&logs[0], &logs[0]], &out);
+    let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("strictly increasing"), "{stderr}");
 
     // Not a PETSc log: one line naming the file.
     let o = run_scaling(&[&logs[0], &case], &out);

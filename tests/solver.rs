@@ -83,6 +83,7 @@ fn a_failing_step_is_cut_and_retried() {
     let (out, stdout) = common::run_case(&case, 1, &[]);
     let s = common::summary(&out);
     assert_eq!(s["converged"], true);
+    assert_eq!(s["completed"], true);
     let steps = s["steps"].as_array().unwrap();
     assert!(steps.len() > 1, "expected the single step to be split");
     let cuts: u64 = steps.iter().map(|st| st["cut"].as_u64().unwrap()).sum();
@@ -199,6 +200,9 @@ fn unconverged_steps_are_accepted_and_recorded_on_request() {
     let flags: Vec<&str> = lines.map(|l| l.split(',').nth(col).unwrap()).collect();
     assert_eq!(flags, ["0", "0", "0"]);
     let s = common::summary(&out_dir);
+    // The full load was reached, but not by converged steps.
+    assert_eq!(s["completed"], true);
+    assert_eq!(s["converged"], false);
     assert_eq!(s["steps"].as_array().unwrap().len(), 3);
     assert!(s["steps"]
         .as_array()

@@ -29,6 +29,8 @@ extern "C" {
     pub fn petsc_ffi_sizeof_petscscalar() -> usize;
     /// `sizeof(PetscReal)`.
     pub fn petsc_ffi_sizeof_petscreal() -> usize;
+    /// `PetscFree(p)` (a macro): frees memory PETSc allocated for the caller.
+    pub fn petsc_ffi_free(p: *mut std::os::raw::c_void) -> PetscErrorCode;
     /// glibc's `malloc_trim(0)`: returns the free memory of every malloc arena to the OS; 1 if
     /// any was returned.
     pub fn petsc_ffi_malloc_trim() -> std::os::raw::c_int;

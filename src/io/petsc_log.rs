@@ -116,6 +116,15 @@ pub fn parse(text: &str) -> std::result::Result<PetscLog, String> {
     if stages.is_empty() {
         return Err("the 'Summary of Stages' table is empty".into());
     }
+    // PETSc ends the summary with the options table (or says there were none): a log
+    // without it was cut short, and its event counts may be missing.
+    let complete = text.lines().any(|l| {
+        l.starts_with("#End of PETSc Option Table entries")
+            || l.starts_with("#No PETSc Option Table entries")
+    });
+    if !complete {
+        return Err("no option table at its end: the log is cut short".into());
+    }
     Ok(PetscLog {
         ranks,
         seconds,
@@ -184,6 +193,9 @@ Memory usage is given in bytes:
 Object Type          Creations   Destructions     Memory  Descendants' Mem.
 --- Event Stage 0: Main Stage
 SNESJacobianEval       1              1         1000     0.
+#PETSc Option Table entries:
+-log_view :log_2.txt
+#End of PETSc Option Table entries
 ";
 
     #[test]
@@ -226,5 +238,13 @@ SNESJacobianEval       1              1         1000     0.
         assert!(parse(&nan_stage)
             .unwrap_err()
             .contains("Mortar integration"));
+        // Cut short before the options table PETSc prints last (its event counts may be lost).
+        let cut = &LOG[..LOG.find("Memory usage").unwrap()];
+        assert!(parse(cut).unwrap_err().contains("cut short"));
+        let no_options = LOG.replace(
+            "#PETSc Option Table entries:\n-log_view :log_2.txt\n#End of PETSc Option Table entries",
+            "#No PETSc Option Table entries",
+        );
+        assert!(parse(&no_options).is_ok());
     }
 }

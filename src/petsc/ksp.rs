@@ -5,7 +5,7 @@
 
 use petsc_ffi as p;
 
-use super::{chk, Matrix, PetscInt, Vector};
+use super::{chk, to_petsc_int, Matrix, PetscInt, Vector};
 use crate::error::Result;
 
 /// What one linear solve did.
@@ -83,4 +83,68 @@ pub(crate) fn set_linear_solver_defaults() -> Result<()> {
         set_default("-ksp_type", if pc { "gmres" } else { "preonly" })?;
     }
     Ok(())
+}
+
+/// The preconditioners whose set-up [`probe_factorization`] checks: factorizations, whose set-up
+/// works on any nonsingular matrix.
+const FACTORIZATIONS: [&str; 4] = ["lu", "cholesky", "ilu", "icc"];
+
+/// Sets up the linear solver of the options database, if it is a factorization, on an identity
+/// matrix of 3 rows per rank, so that what PETSc reads only when it first factorizes fails here,
+/// on every rank alike and before the first step, instead of in the middle of a solve (where an
+/// error may be one rank's, and ends the job): a solver package that does not exist or does not
+/// take this matrix type (`-pc_factor_mat_solver_type`, `-pc_type ilu` on 2 ranks), a malformed
+/// package option (`-mat_mumps_icntl_8 xyz`). Other preconditioners are not probed: one may
+/// need more than a matrix (fields, coordinates) to be set up. Collective.
+pub(crate) fn probe_factorization() -> Result<()> {
+    let ksp = Ksp::new()?;
+    let mut pc: p::PC = std::ptr::null_mut();
+    chk!(KSPGetPC(ksp.raw, &mut pc))?;
+    let mut pc_type: p::PCType = std::ptr::null();
+    chk!(PCGetType(pc, &mut pc_type))?;
+    if pc_type.is_null() {
+        return Ok(());
+    }
+    // SAFETY: PETSc returns its NUL-terminated type name.
+    let name = unsafe { std::ffi::CStr::from_ptr(pc_type) }.to_string_lossy();
+    if !FACTORIZATIONS.contains(&name.as_ref()) {
+        return Ok(());
+    }
+    let mut raw: p::Mat = std::ptr::null_mut();
+    chk!(MatCreate(super::comm(), &mut raw))?;
+    let mut identity = Matrix { raw };
+    let rows = to_petsc_int(3)?;
+    chk!(MatSetSizes(
+        identity.raw,
+        rows,
+        rows,
+        p::PETSC_DETERMINE,
+        p::PETSC_DETERMINE
+    ))?;
+    chk!(MatSetType(identity.raw, c"aij".as_ptr()))?;
+    // Both calls are made; PETSc ignores the one that does not match the actual type.
+    chk!(MatSeqAIJSetPreallocation(identity.raw, 1, std::ptr::null()))?;
+    chk!(MatMPIAIJSetPreallocation(
+        identity.raw,
+        1,
+        std::ptr::null(),
+        0,
+        std::ptr::null()
+    ))?;
+    let (mut lo, mut hi): (PetscInt, PetscInt) = (0, 0);
+    chk!(MatGetOwnershipRange(identity.raw, &mut lo, &mut hi))?;
+    for row in lo..hi {
+        chk!(MatSetValues(
+            identity.raw,
+            1,
+            &row,
+            1,
+            &row,
+            &1.0,
+            p::InsertMode::INSERT_VALUES
+        ))?;
+    }
+    identity.assemble()?;
+    chk!(KSPSetOperators(ksp.raw, identity.raw, identity.raw))?;
+    chk!(KSPSetUp(ksp.raw))
 }

@@ -34,6 +34,45 @@ pub fn set_default(name: &str, value: &str) -> Result<()> {
     ))
 }
 
+/// Every option in the database as `(-name, value)`, in PETSc's order (`PetscOptionsGetAll`):
+/// the command line, the options file, a study variant's and the defaults a run set.
+pub fn all() -> Result<Vec<(String, Option<String>)>> {
+    let mut text: *mut std::os::raw::c_char = std::ptr::null_mut();
+    chk!(PetscOptionsGetAll(std::ptr::null_mut(), &mut text))?;
+    if text.is_null() {
+        return Ok(Vec::new());
+    }
+    // SAFETY: PETSc returned a NUL-terminated string it allocated for us; copied, then freed.
+    let owned = unsafe { std::ffi::CStr::from_ptr(text) }
+        .to_string_lossy()
+        .into_owned();
+    // SAFETY: `text` came from PetscMalloc inside PetscOptionsGetAll and is freed once.
+    unsafe { p::petsc_ffi_free(text.cast()) };
+    // A value PETSc printed that does not parse as ours is left out, not an error: this
+    // listing only serves messages.
+    Ok(parse(&owned).unwrap_or_default())
+}
+
+/// The names of the options whose value is `value`: for an error message of PETSc that quotes
+/// a bad value without saying whose it is ("Input string abc has no integer value").
+pub fn named_by_value(value: &str) -> Vec<String> {
+    all()
+        .unwrap_or_default()
+        .into_iter()
+        .filter(|(_, v)| v.as_deref() == Some(value))
+        .map(|(name, _)| name)
+        .collect()
+}
+
+/// How many [`Override`]s with options of their own are alive: while one is, the options a
+/// run reads include a study variant's (`petsc`), which messages then name as a source.
+static OVERRIDES: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+/// True while a study variant's own PETSc options are in the database ([`Override`]).
+pub fn overridden() -> bool {
+    OVERRIDES.load(std::sync::atomic::Ordering::Relaxed) > 0
+}
+
 /// The options a run may write into the database as defaults ([`set_default`]: the linear
 /// solver's, `ksp::set_linear_solver_defaults`, and the stash of a matrix on more than one rank,
 /// `matrix::Matrix::new_aij`), restored with a study variant's own options ([`Override`]).
@@ -59,6 +98,8 @@ pub struct Override {
     previous: Vec<(CString, Saved)>,
     /// The names set (not the defaults only saved).
     set: Vec<CString>,
+    /// Counted in `OVERRIDES` (it has options of its own).
+    counted: bool,
 }
 
 /// An option's value before an [`Override`], and whether something had read it.
@@ -86,7 +127,11 @@ impl Override {
         let mut guard = Override {
             previous: Vec::with_capacity(options.len()),
             set: Vec::with_capacity(options.len()),
+            counted: !options.is_empty(),
         };
+        if guard.counted {
+            OVERRIDES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        }
         for name in DEFAULTED_OPTIONS {
             let n = CString::new(name).expect("option names have no NUL");
             let saved = Saved::of(&n)?;
@@ -119,6 +164,9 @@ impl Override {
 
 impl Drop for Override {
     fn drop(&mut self) {
+        if self.counted {
+            OVERRIDES.fetch_sub(1, std::sync::atomic::Ordering::Relaxed);
+        }
         for (name, before) in self.previous.drain(..).rev() {
             let restored = match &before.value {
                 Some(value) => set_fresh(&name, value.as_ref()).and_then(|()| {

@@ -74,6 +74,31 @@ pub struct Tolerances {
     pub max_it: usize,
 }
 
+/// A PETSc error met while reading the options: an [`Error::Options`] naming their source and,
+/// when PETSc's message quotes a bad value without its option ("Input string abc has no integer
+/// value"), the options that hold that value.
+fn options_error(options_source: &str, e: Error) -> Error {
+    let Error::Petsc { msg, .. } = e else {
+        return e;
+    };
+    let quoted = msg
+        .strip_prefix("Input string ")
+        .or_else(|| msg.strip_prefix("Unknown logical value: "))
+        .and_then(|rest| rest.split_whitespace().next());
+    let holders = quoted.map_or_else(Vec::new, super::options::named_by_value);
+    let msg = match (quoted, holders.is_empty()) {
+        (Some(value), false) => {
+            let named: Vec<String> = holders.iter().map(|n| format!("{n} {value}")).collect();
+            format!("{}: {msg}", named.join(", "))
+        }
+        _ => msg,
+    };
+    Error::Options {
+        source_name: options_source.to_string(),
+        msg,
+    }
+}
+
 type ResidualFn<'a> = dyn FnMut(&Vector, &mut Vector) -> Result<(), CallbackError> + 'a;
 type JacobianFn<'a> = dyn FnMut(&Vector, &mut Matrix) -> Result<(), CallbackError> + 'a;
 
@@ -126,13 +151,7 @@ impl Snes {
             super::to_petsc_int(tol.max_it)?,
             -1
         ))?;
-        chk!(SNESSetFromOptions(snes.raw)).map_err(|e| match e {
-            Error::Petsc { msg, .. } => Error::Options {
-                source_name: options_source.to_string(),
-                msg,
-            },
-            other => other,
-        })?;
+        chk!(SNESSetFromOptions(snes.raw)).map_err(|e| options_error(options_source, e))?;
         let mut max_it: PetscInt = 0;
         let mut max_f: PetscInt = 0;
         let (mut atol, mut rtol, mut stol) = (0.0, 0.0, 0.0);
@@ -153,6 +172,14 @@ impl Snes {
                 });
             }
         }
+        if max_it < 0 {
+            // PETSc would stop at once without a reason ("Internal error").
+            return Err(Error::Options {
+                source_name: options_source.to_string(),
+                msg: format!("-snes_max_it {max_it}: must be >= 0"),
+            });
+        }
+        super::ksp::probe_factorization().map_err(|e| options_error(options_source, e))?;
         let mut snes = snes;
         snes.history = vec![0.0; max_it.max(1) as usize + 2];
         Ok(snes)

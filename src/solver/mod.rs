@@ -541,7 +541,8 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
             fallbacks_before = fallbacks;
             dt = (2.0 * dt).min(dt_nominal);
         }
-        summary.converged = t >= 1.0 - 1e-12;
+        summary.completed = t >= 1.0 - 1e-12;
+        summary.converged = summary.completed && unconverged == 0;
         // Results describe the last converged state (x was restored after a failed attempt).
         {
             let mut s = state.borrow_mut();
@@ -576,8 +577,10 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                     .metrics
                     .insert("line_search_fallbacks".into(), fallbacks as f64);
             }
-            let gap = model.tying.max_relative_gap(&s.u, &world);
-            summary.metrics.insert("max_relative_gap".into(), gap);
+            if !model.tying.is_empty() {
+                let gap = model.tying.max_relative_gap(&s.u, &world);
+                summary.metrics.insert("max_relative_gap".into(), gap);
+            }
             let most = summary
                 .steps
                 .iter()
@@ -615,7 +618,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         }
         say(format!(
             "mortar: {} -> {}",
-            match (summary.converged, unconverged) {
+            match (summary.completed, unconverged) {
                 (true, 0) => "converged".to_string(),
                 (true, n) => format!(
                     "completed with {n} unconverged step(s) accepted (steps.on_failure = \"continue\")"
@@ -625,13 +628,13 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
             opts.out_dir.display()
         ));
         match &summary.message {
-            Some(m) if !summary.converged => Err(Error::Solve(m.clone())),
+            Some(m) if !summary.completed => Err(Error::Solve(m.clone())),
             _ => Ok(summary),
         }
     })();
     match stepping {
         Err(e) if ranks > 1 && !e.is_collective() => {
-            print_error(format_args!("[rank {rank}] {e}"));
+            print_error(crate::error::abort_line(rank as i32, &e));
             world.abort(1)
         }
         other => other,
@@ -806,11 +809,21 @@ fn s_u(state: &RefCell<EvalState>) -> Vec<f64> {
     state.borrow().u.clone()
 }
 
-/// Where PETSc's options came from, for messages.
+/// Where PETSc's options came from, for messages: the command line, the scene's options file,
+/// and a study variant's `petsc` while one is set.
 fn options_source(scene: &Scene) -> String {
-    match &scene.petsc_options {
-        Some(f) => format!("command line or {}", f.display()),
-        None => "command line".into(),
+    let mut sources = vec!["command line".to_string()];
+    if let Some(f) = &scene.petsc_options {
+        sources.push(f.display().to_string());
+    }
+    if crate::petsc::options::overridden() {
+        sources.push("the study variant's `petsc`".into());
+    }
+    let n = sources.len();
+    if n == 1 {
+        sources.remove(0)
+    } else {
+        format!("{} or {}", sources[..n - 1].join(", "), sources[n - 1])
     }
 }
 

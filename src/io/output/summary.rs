@@ -27,7 +27,12 @@ pub struct StepRecord {
 pub struct Summary {
     pub case: String,
     pub ranks: usize,
+    /// Every step converged and the run reached the full load.
     pub converged: bool,
+    /// The run reached the full load, possibly through steps accepted without convergence
+    /// (`steps.on_failure = "continue"`; counted in the metric `unconverged_steps`).
+    #[serde(default)]
+    pub completed: bool,
     pub steps: Vec<StepRecord>,
     /// Wall-clock seconds by phase.
     pub timings: BTreeMap<String, f64>,
@@ -83,6 +88,7 @@ mod tests {
             case: "hertz".into(),
             ranks: 4,
             converged: false,
+            completed: false,
             steps: vec![
                 StepRecord {
                     step: 1,
