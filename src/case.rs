@@ -856,12 +856,17 @@ fn build_interface(
     if !(penalty_growth_cap >= 1.0 && penalty_growth_cap.is_finite()) {
         return Err(format!("{cap_key}: must be finite and >= 1"));
     }
-    // The cap bounds a grown penalty: it matters only when the penalty grows.
-    if penalty_growth > 1.0 && penalty * penalty_growth_cap > PENALTY_RANGE.1 {
+    // The cap bounds both grown penalties: it matters only when they grow.
+    let (name, largest) = if tangential_penalty > penalty {
+        ("tangential_penalty", tangential_penalty)
+    } else {
+        ("penalty", penalty)
+    };
+    if penalty_growth > 1.0 && largest * penalty_growth_cap > PENALTY_RANGE.1 {
         return Err(format!(
-            "{cap_key}: with penalty_growth = {penalty_growth} the penalty ({penalty:e}) may grow \
+            "{cap_key}: with penalty_growth = {penalty_growth} the {name} ({largest:e}) may grow \
              to {:e}, above {:e}",
-            penalty * penalty_growth_cap,
+            largest * penalty_growth_cap,
             PENALTY_RANGE.1
         ));
     }

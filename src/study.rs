@@ -1342,16 +1342,22 @@ impl Study {
             .find(|v| v.is_default())
             .filter(|d| !self.is_reference(d));
         if let Some(d) = default {
-            // The candidates among the runs of the defaults: those with an error, and the
-            // failed ones (off the front); not the truth (a finest_reference run) nor, with
-            // [curves], the runs below the last level, which have no error to place.
-            let finest = self.refinements.len() - 1;
-            let truth = |r: &RunRecord| {
-                self.finest_reference.as_deref() == Some(r.variant.as_str()) && r.level == finest
+            // The candidates among the runs of the defaults, the failed ones counted (off the
+            // front): with [curves] those of the last level, where curves are scored (the runs
+            // below it carry no error, and `converged = false`: `curve_scores`); otherwise
+            // every run but the truth (the finest_reference run).
+            let finest = self.finest_level();
+            let last = self.refinements.len() - 1;
+            let candidate = |r: &RunRecord| match &self.curves {
+                Some(_) => r.level == last,
+                None => {
+                    !(self.finest_reference.as_deref() == Some(r.variant.as_str())
+                        && r.level == finest)
+                }
             };
             let mine: Vec<&RunRecord> = runs
                 .iter()
-                .filter(|r| r.variant == d.name && !truth(r) && (r.error.is_some() || !r.converged))
+                .filter(|r| r.variant == d.name && candidate(r))
                 .collect();
             if !mine.is_empty() {
                 let on = mine.iter().filter(|r| r.on_front).count();

@@ -697,6 +697,11 @@ value = [0.0, 0.0, -1.0]
             "interface[0].penalty_growth_cap",
         ),
         check(
+            "tangential_penalty_growth_overflowing",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\ntangential_penalty = 1e11\npenalty_growth = 2.0\n"),
+            "the tangential_penalty (1e11)",
+        ),
+        check(
             "penalty_growth_default_cap_overflowing",
             valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\npenalty = 1e11\npenalty_growth = 2.0\n"),
             "interface[0].penalty_growth_cap (default 100)",
@@ -736,8 +741,8 @@ value = [0.0, 0.0, -1.0]
         run("snes_max_it_negative", text(VALID), "-snes_max_it -5")
             .args(&["-snes_max_it", "-5"]),
         // Read by PETSc only at the first factorization; checked before the first step.
-        run("solver_package_missing", text(VALID), "pastix")
-            .args(&["-pc_factor_mat_solver_type", "pastix"]),
+        run("solver_package_missing", text(VALID), "nonexistent")
+            .args(&["-pc_factor_mat_solver_type", "nonexistent"]),
         run("package_option_not_an_integer", text(VALID), "-mat_mumps_icntl_8 xyz")
             .args(&["-mat_mumps_icntl_8", "xyz"]),
         run(

@@ -65,8 +65,8 @@ fn collective_failures_on_two_ranks_report_once() {
         (
             "two_rank_missing_solver_package",
             sphere.clone(),
-            &["-q", "-pc_factor_mat_solver_type", "pastix"],
-            "pastix",
+            &["-q", "-pc_factor_mat_solver_type", "nonexistent"],
+            "nonexistent",
         ),
         (
             "two_rank_bad_package_option",

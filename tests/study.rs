@@ -893,9 +893,9 @@ fn failed_runs_on_two_ranks_print_the_expectations_once() {
 /// naming neither, and no CSV was written.)
 #[test]
 fn a_variants_missing_solver_package_on_two_ranks_names_the_variant() {
-    let study = study_with_a_failing_variant("", "pastix").replace(
+    let study = study_with_a_failing_variant("", "nopackage").replace(
         "-ksp_type no_such_solver",
-        "-pc_factor_mat_solver_type pastix",
+        "-pc_factor_mat_solver_type nonexistent",
     );
     let dir = study_dir("study_missing_package_two_ranks", &study);
     let out = dir.join("out");
@@ -909,9 +909,9 @@ fn a_variants_missing_solver_package_on_two_ranks_names_the_variant() {
     assert_eq!(errors.len(), 1, "{stderr}");
     for part in [
         "1 of 2 runs failed",
-        "pastix level 0",
+        "nopackage level 0",
         "the study variant's `petsc`",
-        "pastix for factorization type LU",
+        "nonexistent for factorization type LU",
     ] {
         assert!(errors[0].contains(part), "{part}: {}", errors[0]);
     }
@@ -1236,4 +1236,34 @@ may_fail = true
         serde_json::from_str(&std::fs::read_to_string(dir.join("out/summary.json")).unwrap())
             .unwrap();
     assert_eq!(s["metrics"]["default_on_front"], 0.5, "{s}");
+}
+
+/// With `[curves]`, `default_on_front` counts the defaults' runs of the last level only, where
+/// curves are scored: here `soft` (the case as it is) against the reference `stiff`, on 2
+/// levels, has 1 of 1 runs on the front (its level-0 run has no error to place, and is not a
+/// failure).
+#[test]
+fn curves_count_the_defaults_at_the_last_level() {
+    let refinements = r#"
+[[refinement]]
+h = 1.0
+set = { "steps.count" = 2 }
+
+[[refinement]]
+h = 0.5
+set = { "steps.count" = 4 }
+"#;
+    let study =
+        block_study(refinements, "", "").replace("reference = \"soft\"", "reference = \"stiff\"");
+    assert!(study.contains("reference = \"stiff\""));
+    let dir = block_study_dir("study_curves_defaults", &study);
+    let o = run_study(&dir, &[]);
+    let stdout = text(&o.stdout);
+    assert!(o.status.success(), "{stdout}{}", text(&o.stderr));
+    assert!(
+        stdout.contains("the defaults (variant 'soft') have 1 of 1 runs on it"),
+        "{stdout}"
+    );
+    let s = common::summary(&dir.join("out"));
+    assert_eq!(s["metrics"]["default_on_front"], 1.0, "{s}");
 }

@@ -370,7 +370,8 @@ pub struct InterfaceSpec {
     /// one, both penalties are multiplied by this factor (>= 1). Default 1: no growth.
     pub penalty_growth: Option<f64>,
     /// Contact: the penalties grow at most to this multiple of their initial values (>= 1;
-    /// when they grow, `penalty_growth` > 1, `penalty` times it at most 1e12). Default 100.
+    /// when they grow, `penalty_growth` > 1, `penalty` and `tangential_penalty` times it at
+    /// most 1e12). Default 100.
     pub penalty_growth_cap: Option<f64>,
 }
 

@@ -89,62 +89,63 @@ pub(crate) fn set_linear_solver_defaults() -> Result<()> {
 /// works on any nonsingular matrix.
 const FACTORIZATIONS: [&str; 4] = ["lu", "cholesky", "ilu", "icc"];
 
-/// Sets up the linear solver of the options database, if it is a factorization, on an identity
-/// matrix of 3 rows per rank, so that what PETSc reads only when it first factorizes fails here,
-/// on every rank alike and before the first step, instead of in the middle of a solve (where an
-/// error may be one rank's, and ends the job): a solver package that does not exist or does not
-/// take this matrix type (`-pc_factor_mat_solver_type`, `-pc_type ilu` on 2 ranks), a malformed
-/// package option (`-mat_mumps_icntl_8 xyz`). Other preconditioners are not probed: one may
-/// need more than a matrix (fields, coordinates) to be set up. Collective.
+/// True when `pc_type` (a `PCGetType` name) is one [`probe_factorization`] checks.
+pub(crate) fn is_probed_factorization(pc_type: &str) -> bool {
+    FACTORIZATIONS.contains(&pc_type)
+}
+
+/// Sets up a linear solver of the options database on a small SPD matrix (tridiagonal 2, -1,
+/// 3 rows per rank, coupled across the ranks), so that what PETSc reads only when it first
+/// factorizes fails here, on every rank alike and before the first step, instead of in the
+/// middle of a solve (where an error may be one rank's, and ends the job): a solver package
+/// that does not exist or does not take this matrix type (`-pc_factor_mat_solver_type`,
+/// `-pc_type ilu` on 2 ranks), a malformed package option (`-mat_mumps_icntl_8 xyz`). For the
+/// factorizations only ([`is_probed_factorization`]; the caller checks): another
+/// preconditioner may need more than a matrix (fields, coordinates) to be set up. Viewers the
+/// options ask for (`-mat_view`, MUMPS's own output) see this matrix too. Collective; the
+/// errors it finds are those of the options, the same on every rank.
 pub(crate) fn probe_factorization() -> Result<()> {
     let ksp = Ksp::new()?;
-    let mut pc: p::PC = std::ptr::null_mut();
-    chk!(KSPGetPC(ksp.raw, &mut pc))?;
-    let mut pc_type: p::PCType = std::ptr::null();
-    chk!(PCGetType(pc, &mut pc_type))?;
-    if pc_type.is_null() {
-        return Ok(());
-    }
-    // SAFETY: PETSc returns its NUL-terminated type name.
-    let name = unsafe { std::ffi::CStr::from_ptr(pc_type) }.to_string_lossy();
-    if !FACTORIZATIONS.contains(&name.as_ref()) {
-        return Ok(());
-    }
     let mut raw: p::Mat = std::ptr::null_mut();
     chk!(MatCreate(super::comm(), &mut raw))?;
-    let mut identity = Matrix { raw };
+    let mut probe = Matrix { raw };
     let rows = to_petsc_int(3)?;
     chk!(MatSetSizes(
-        identity.raw,
+        probe.raw,
         rows,
         rows,
         p::PETSC_DETERMINE,
         p::PETSC_DETERMINE
     ))?;
-    chk!(MatSetType(identity.raw, c"aij".as_ptr()))?;
+    chk!(MatSetType(probe.raw, c"aij".as_ptr()))?;
     // Both calls are made; PETSc ignores the one that does not match the actual type.
-    chk!(MatSeqAIJSetPreallocation(identity.raw, 1, std::ptr::null()))?;
+    chk!(MatSeqAIJSetPreallocation(probe.raw, 3, std::ptr::null()))?;
     chk!(MatMPIAIJSetPreallocation(
-        identity.raw,
-        1,
+        probe.raw,
+        3,
         std::ptr::null(),
-        0,
+        2,
         std::ptr::null()
     ))?;
-    let (mut lo, mut hi): (PetscInt, PetscInt) = (0, 0);
-    chk!(MatGetOwnershipRange(identity.raw, &mut lo, &mut hi))?;
+    let (mut lo, mut hi, mut n): (PetscInt, PetscInt, PetscInt) = (0, 0, 0);
+    chk!(MatGetOwnershipRange(probe.raw, &mut lo, &mut hi))?;
+    chk!(MatGetSize(probe.raw, &mut n, std::ptr::null_mut()))?;
     for row in lo..hi {
-        chk!(MatSetValues(
-            identity.raw,
-            1,
-            &row,
-            1,
-            &row,
-            &1.0,
-            p::InsertMode::INSERT_VALUES
-        ))?;
+        for (col, value) in [(row - 1, -1.0), (row, 2.0), (row + 1, -1.0)] {
+            if (0..n).contains(&col) {
+                chk!(MatSetValues(
+                    probe.raw,
+                    1,
+                    &row,
+                    1,
+                    &col,
+                    &value,
+                    p::InsertMode::INSERT_VALUES
+                ))?;
+            }
+        }
     }
-    identity.assemble()?;
-    chk!(KSPSetOperators(ksp.raw, identity.raw, identity.raw))?;
+    probe.assemble()?;
+    chk!(KSPSetOperators(ksp.raw, probe.raw, probe.raw))?;
     chk!(KSPSetUp(ksp.raw))
 }

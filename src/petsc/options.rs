@@ -48,9 +48,39 @@ pub fn all() -> Result<Vec<(String, Option<String>)>> {
         .into_owned();
     // SAFETY: `text` came from PetscMalloc inside PetscOptionsGetAll and is freed once.
     unsafe { p::petsc_ffi_free(text.cast()) };
-    // A value PETSc printed that does not parse as ours is left out, not an error: this
-    // listing only serves messages.
-    Ok(parse(&owned).unwrap_or_default())
+    Ok(listed(&owned))
+}
+
+/// A word that names an option, as PETSc reads its command line: `-` and a letter (`-1` is a
+/// value).
+fn is_option_name(word: &str) -> bool {
+    word.starts_with('-')
+        && word[1..]
+            .chars()
+            .next()
+            .is_some_and(|c| c.is_ascii_alphabetic())
+}
+
+/// The options of `PetscOptionsGetAll`'s string: a word starting with `-` and a letter is a
+/// name, the words after it up to the next name its value (a value may hold spaces).
+fn listed(text: &str) -> Vec<(String, Option<String>)> {
+    let mut out: Vec<(String, Option<String>)> = Vec::new();
+    for word in text.split_whitespace() {
+        let is_name = is_option_name(word);
+        match out.last_mut() {
+            Some((_, value)) if !is_name => match value {
+                Some(v) => {
+                    v.push(' ');
+                    v.push_str(word);
+                }
+                None => *value = Some(word.to_string()),
+            },
+            _ if is_name => out.push((word.to_string(), None)),
+            // A stray word before any name: not an option.
+            _ => {}
+        }
+    }
+    out
 }
 
 /// The names of the options whose value is `value`: for an error message of PETSc that quotes
@@ -255,11 +285,7 @@ pub fn parse_words<'a>(
 ) -> std::result::Result<Vec<(String, Option<String>)>, String> {
     let mut out: Vec<(String, Option<String>)> = Vec::new();
     for word in words {
-        let is_name = word.starts_with('-')
-            && word[1..]
-                .chars()
-                .next()
-                .is_some_and(|c| c.is_ascii_alphabetic());
+        let is_name = is_option_name(word);
         if is_name {
             out.push((word.to_string(), None));
         } else {
@@ -279,7 +305,20 @@ pub fn parse_words<'a>(
 
 #[cfg(test)]
 mod tests {
-    use super::parse;
+    use super::{listed, parse};
+
+    #[test]
+    fn the_database_listing_keeps_values_with_spaces() {
+        let got = listed("-ksp_type gmres -title my run -x -1 -flag");
+        let want: Vec<(String, Option<String>)> = vec![
+            ("-ksp_type".into(), Some("gmres".into())),
+            ("-title".into(), Some("my run".into())),
+            ("-x".into(), Some("-1".into())),
+            ("-flag".into(), None),
+        ];
+        assert_eq!(got, want);
+        assert!(listed("").is_empty());
+    }
 
     #[test]
     fn options_strings_split_into_names_and_values() {

@@ -122,8 +122,11 @@ pub struct Snes {
 
 impl Snes {
     /// A Newton solver with the project's defaults and the line search `line_search` (`basic`:
-    /// full steps; `bt`: backtracking), then `SNESSetFromOptions`. `options_source` names where
-    /// the options came from, for the error message when one is invalid.
+    /// full steps; `bt`: backtracking), then `SNESSetFromOptions`, and, when its Newton steps
+    /// factorize, the factorization set up once on a small matrix
+    /// ([`super::ksp::probe_factorization`]), so that every option is checked before the first
+    /// step. `options_source` names where the options came from, for the error message when
+    /// one is invalid. Collective.
     pub fn new(tol: Tolerances, options_source: &str, line_search: &str) -> Result<Snes> {
         super::ensure_initialized()?;
         let mut raw: p::SNES = std::ptr::null_mut();
@@ -179,10 +182,40 @@ impl Snes {
                 msg: format!("-snes_max_it {max_it}: must be >= 0"),
             });
         }
-        super::ksp::probe_factorization().map_err(|e| options_error(options_source, e))?;
+        if snes.factorizes()? {
+            super::ksp::probe_factorization().map_err(|e| options_error(options_source, e))?;
+        }
         let mut snes = snes;
         snes.history = vec![0.0; max_it.max(1) as usize + 2];
         Ok(snes)
+    }
+
+    /// True when this solver's Newton steps factorize: a Newton type with a Jacobian
+    /// (`newtonls`, `newtontr`; not `-snes_mf`, whose preconditioner is none) whose linear
+    /// solver's preconditioner is one [`super::ksp::probe_factorization`] checks.
+    fn factorizes(&self) -> Result<bool> {
+        let name = |s: *const std::os::raw::c_char| {
+            if s.is_null() {
+                String::new()
+            } else {
+                // SAFETY: PETSc returns its static NUL-terminated type names.
+                unsafe { std::ffi::CStr::from_ptr(s) }
+                    .to_string_lossy()
+                    .into_owned()
+            }
+        };
+        let mut snes_type: p::SNESType = std::ptr::null();
+        chk!(SNESGetType(self.raw, &mut snes_type))?;
+        if !matches!(name(snes_type).as_str(), "newtonls" | "newtontr") {
+            return Ok(false);
+        }
+        let mut ksp: p::KSP = std::ptr::null_mut();
+        chk!(SNESGetKSP(self.raw, &mut ksp))?;
+        let mut pc: p::PC = std::ptr::null_mut();
+        chk!(KSPGetPC(ksp, &mut pc))?;
+        let mut pc_type: p::PCType = std::ptr::null();
+        chk!(PCGetType(pc, &mut pc_type))?;
+        Ok(super::ksp::is_probed_factorization(&name(pc_type)))
     }
 
     /// Solves F(x) = 0 from the initial guess in `x` (overwritten by the solution).
