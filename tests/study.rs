@@ -441,6 +441,17 @@ abs = true
 
 const ONE_REFINEMENT: &str = "[[refinement]]\nh = 1.0\n";
 
+/// Two levels of the block: 2 load steps, then 4.
+const TWO_REFINEMENTS: &str = r#"
+[[refinement]]
+h = 1.0
+set = { "steps.count" = 2 }
+
+[[refinement]]
+h = 0.5
+set = { "steps.count" = 4 }
+"#;
+
 /// `curve_max_rel_diff_<variant>` from the study summary.
 fn curve_diff(out: &Path, variant: &str) -> Option<f64> {
     common::summary(out)["metrics"][format!("curve_max_rel_diff_{variant}")].as_f64()
@@ -455,15 +466,7 @@ fn first_series_markers(svg: &str) -> usize {
 #[test]
 fn curves_compare_variants_at_the_last_level() {
     // Level 0 in 2 steps, level 1 in 4: the curves are those of level 1.
-    let refinements = r#"
-[[refinement]]
-h = 1.0
-set = { "steps.count" = 2 }
-
-[[refinement]]
-h = 0.5
-set = { "steps.count" = 4 }
-"#;
+    let refinements = TWO_REFINEMENTS;
     let dir = block_study_dir(
         "study_curves",
         &block_study(refinements, "", "x_label = \"top displacement\""),
@@ -1244,15 +1247,7 @@ may_fail = true
 /// failure).
 #[test]
 fn curves_count_the_defaults_at_the_last_level() {
-    let refinements = r#"
-[[refinement]]
-h = 1.0
-set = { "steps.count" = 2 }
-
-[[refinement]]
-h = 0.5
-set = { "steps.count" = 4 }
-"#;
+    let refinements = TWO_REFINEMENTS;
     let study =
         block_study(refinements, "", "").replace("reference = \"soft\"", "reference = \"stiff\"");
     assert!(study.contains("reference = \"stiff\""));

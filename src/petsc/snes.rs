@@ -74,6 +74,21 @@ pub struct Tolerances {
     pub max_it: usize,
 }
 
+/// A PETSc type name as a `String` (empty for null).
+///
+/// # Safety
+/// `name` is null or a NUL-terminated string that lives through the call (PETSc's type names
+/// are static).
+unsafe fn type_name(name: *const std::os::raw::c_char) -> String {
+    if name.is_null() {
+        return String::new();
+    }
+    // SAFETY: the caller's promise.
+    unsafe { std::ffi::CStr::from_ptr(name) }
+        .to_string_lossy()
+        .into_owned()
+}
+
 /// A PETSc error met while reading the options: an [`Error::Options`] naming their source and,
 /// when PETSc's message quotes a bad value without its option ("Input string abc has no integer
 /// value"), the options that hold that value.
@@ -124,7 +139,7 @@ impl Snes {
     /// A Newton solver with the project's defaults and the line search `line_search` (`basic`:
     /// full steps; `bt`: backtracking), then `SNESSetFromOptions`, and, when its Newton steps
     /// factorize, the factorization set up once on a small matrix
-    /// ([`super::ksp::probe_factorization`]), so that every option is checked before the first
+    /// (`ksp::probe_factorization`), so that every option is checked before the first
     /// step. `options_source` names where the options came from, for the error message when
     /// one is invalid. Collective.
     pub fn new(tol: Tolerances, options_source: &str, line_search: &str) -> Result<Snes> {
@@ -194,28 +209,31 @@ impl Snes {
     /// (`newtonls`, `newtontr`; not `-snes_mf`, whose preconditioner is none) whose linear
     /// solver's preconditioner is one [`super::ksp::probe_factorization`] checks.
     fn factorizes(&self) -> Result<bool> {
-        let name = |s: *const std::os::raw::c_char| {
-            if s.is_null() {
-                String::new()
-            } else {
-                // SAFETY: PETSc returns its static NUL-terminated type names.
-                unsafe { std::ffi::CStr::from_ptr(s) }
-                    .to_string_lossy()
-                    .into_owned()
-            }
-        };
         let mut snes_type: p::SNESType = std::ptr::null();
         chk!(SNESGetType(self.raw, &mut snes_type))?;
-        if !matches!(name(snes_type).as_str(), "newtonls" | "newtontr") {
+        // SAFETY: PETSc returns its static type name, or null.
+        if !matches!(
+            unsafe { type_name(snes_type) }.as_str(),
+            "newtonls" | "newtontr"
+        ) {
             return Ok(false);
         }
+        Ok(super::ksp::is_probed_factorization(
+            &self.preconditioner()?.1,
+        ))
+    }
+
+    /// The preconditioner of this solver's linear solver, and its type name (empty before
+    /// one is set).
+    fn preconditioner(&self) -> Result<(p::PC, String)> {
         let mut ksp: p::KSP = std::ptr::null_mut();
         chk!(SNESGetKSP(self.raw, &mut ksp))?;
         let mut pc: p::PC = std::ptr::null_mut();
         chk!(KSPGetPC(ksp, &mut pc))?;
         let mut pc_type: p::PCType = std::ptr::null();
         chk!(PCGetType(pc, &mut pc_type))?;
-        Ok(super::ksp::is_probed_factorization(&name(pc_type)))
+        // SAFETY: PETSc returns its static type name, or null.
+        Ok((pc, unsafe { type_name(pc_type) }))
     }
 
     /// Solves F(x) = 0 from the initial guess in `x` (overwritten by the solution).
@@ -300,13 +318,8 @@ impl Snes {
         chk!(SNESGetLineSearch(self.raw, &mut ls))?;
         let mut name: p::SNESLineSearchType = std::ptr::null();
         chk!(SNESLineSearchGetType(ls, &mut name))?;
-        if name.is_null() {
-            return Ok(String::new());
-        }
-        // SAFETY: PETSc returns its static NUL-terminated type name.
-        Ok(unsafe { std::ffi::CStr::from_ptr(name) }
-            .to_string_lossy()
-            .into_owned())
+        // SAFETY: PETSc returns its static type name, or null.
+        Ok(unsafe { type_name(name) })
     }
 
     /// Switches the line search of the next solves to `name` (`basic`, `bt`, `l2`, ...).
@@ -374,28 +387,14 @@ impl Snes {
     /// on, as by default), or `None` when the linear solver is not a MUMPS factorization or
     /// nothing was factorized yet. The predictor's solves count: they use this solver's KSP.
     pub fn null_pivots(&self) -> Result<Option<usize>> {
-        let mut ksp: p::KSP = std::ptr::null_mut();
-        chk!(SNESGetKSP(self.raw, &mut ksp))?;
-        let mut pc: p::PC = std::ptr::null_mut();
-        chk!(KSPGetPC(ksp, &mut pc))?;
-        let mut pc_type: p::PCType = std::ptr::null();
-        chk!(PCGetType(pc, &mut pc_type))?;
-        // SAFETY: PETSc returns a static NUL-terminated type name (or null before set-up).
-        let name = |s: *const std::os::raw::c_char| {
-            if s.is_null() {
-                String::new()
-            } else {
-                unsafe { std::ffi::CStr::from_ptr(s) }
-                    .to_string_lossy()
-                    .into_owned()
-            }
-        };
-        if !matches!(name(pc_type).as_str(), "lu" | "cholesky") {
+        let (pc, pc_type) = self.preconditioner()?;
+        if !matches!(pc_type.as_str(), "lu" | "cholesky") {
             return Ok(None);
         }
         let mut solver: p::MatSolverType = std::ptr::null();
         chk!(PCFactorGetMatSolverType(pc, &mut solver))?;
-        if name(solver) != "mumps" {
+        // SAFETY: PETSc returns its static type name, or null.
+        if unsafe { type_name(solver) } != "mumps" {
             return Ok(None);
         }
         let mut factor: p::Mat = std::ptr::null_mut();
