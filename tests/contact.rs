@@ -551,3 +551,42 @@ fn parted_bodies_keep_their_contact_metrics() {
     assert!(!metrics.contains_key("max_relative_gap"), "{metrics:?}");
     assert_eq!(common::metric(&out, "pairs_slide_pairs_integrated"), 0.0);
 }
+
+/// The interface output of the contact patch with Hex20 (scheme 2: traction unknowns at the
+/// corners only): every corner of the pressed interface is in contact (`status` 1 or 2), and
+/// the mid-side nodes, which carry no traction unknown, are marked -1, not 0 ("open").
+#[test]
+fn interface_status_marks_nodes_without_a_traction_unknown() {
+    let text =
+        common::scene_text("contact_patch").replace("element = \"hex8\"", "element = \"hex20\"");
+    assert_eq!(text.matches("element = \"hex20\"").count(), 2);
+    let case = common::write_scene_copy("patch_hex20_status", "contact_patch", &text);
+    let (out, _) = common::run_case(&case, 1, &["-q"]);
+    let vtu = std::fs::read_dir(out.join("vtu"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.to_string_lossy().contains("_blocks_pass1_"))
+        .max()
+        .expect("an interface VTU");
+    let xml = std::fs::read_to_string(&vtu).unwrap();
+    let start = xml.find("Name=\"status\"").expect("a status field");
+    let body = &xml[start..];
+    let data = &body[body.find('>').unwrap() + 1..body.find("</DataArray>").unwrap()];
+    let bytes = mortar::io::output::base64_decode(data).unwrap();
+    let status: Vec<f64> = bytes[8..]
+        .chunks(8)
+        .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
+        .collect();
+    let count = |v: f64| status.iter().filter(|&&s| s == v).count();
+    assert!(count(-1.0) > 0, "no mid-side node marked: {status:?}");
+    assert_eq!(
+        count(0.0),
+        0,
+        "a node of the closed interface reads open: {status:?}"
+    );
+    assert_eq!(
+        count(-1.0) + count(1.0) + count(2.0),
+        status.len(),
+        "{status:?}"
+    );
+}

@@ -33,9 +33,9 @@
 //! a group that refers to any other node is an error. Surface, line and point elements in no
 //! physical group are ignored.
 //!
-//! When the node tags of the file are dense (`max - min + 1 == count`), `mshio` does not keep
-//! them; the nodes are then taken to be numbered consecutively in file order from the minimum
-//! tag, which is what Gmsh writes.
+//! The node tags are read from the file in file order (`mshio` drops them when they are dense,
+//! `max - min + 1 == count`, and keeps them in a map otherwise), so nodes listed out of tag
+//! order are placed by their tags, and a tag defined twice is an error.
 //!
 //! The mesh is checked ([`Mesh::check`]) before it is returned; element messages then carry the
 //! Gmsh element tag.
@@ -175,6 +175,68 @@ impl Reader {
         Ok(())
     }
 
+    /// The node tags of `$Nodes` in file order, for blocks of `counts` nodes (as `mshio` read
+    /// them). `mshio` keeps a block's tags only when the file's tags are not dense, and then
+    /// in a map, where a repeated tag overwrites; a file whose dense tags are not in order, or
+    /// that repeats a tag, would be misread. So the tags are read here, in ASCII as in binary
+    /// (`size_t` of the data size, `int` of 4 bytes, coordinates of 8).
+    fn node_tags(&self, bytes: &[u8], counts: &[usize]) -> Result<Vec<u64>> {
+        let bad = || self.err("cannot read the node tags of $Nodes");
+        let format: Vec<String> = bytes
+            .split(|&b| b == b'\n')
+            .map(|l| String::from_utf8_lossy(l).trim().to_string())
+            .skip_while(|l| l != "$MeshFormat")
+            .nth(1)
+            .map(|l| l.split_whitespace().map(str::to_string).collect())
+            .unwrap_or_default();
+        let binary = format.get(1).is_some_and(|t| t == "1");
+        let size_t: usize = format.get(2).and_then(|d| d.parse().ok()).unwrap_or(8);
+        let marker = b"$Nodes\n";
+        let start = bytes
+            .windows(marker.len())
+            .enumerate()
+            .find(|(i, w)| *w == marker && (*i == 0 || bytes[i - 1] == b'\n'))
+            .map(|(i, _)| i + marker.len())
+            .ok_or_else(bad)?;
+        let body = &bytes[start..];
+        let total: usize = counts.iter().sum();
+        let mut tags = Vec::with_capacity(total);
+        if binary {
+            let unsigned = |at: usize| -> Option<u64> {
+                let b = body.get(at..at + size_t)?;
+                Some(match size_t {
+                    4 => u64::from(u32::from_le_bytes(b.try_into().ok()?)),
+                    _ => u64::from_le_bytes(b.try_into().ok()?),
+                })
+            };
+            // The header: 4 size_t; each block: 3 int, a size_t count, the tags, 3 doubles each.
+            let mut at = 4 * size_t;
+            for &n in counts {
+                at += 3 * 4 + size_t;
+                for k in 0..n {
+                    tags.push(unsigned(at + k * size_t).ok_or_else(bad)?);
+                }
+                at += n * size_t + 3 * 8 * n;
+            }
+        } else {
+            let mut words = std::str::from_utf8(body)
+                .map_err(|_| bad())?
+                .split_ascii_whitespace();
+            // The header: 4 numbers; each block: 4 numbers, the tags, 3 coordinates each.
+            words.nth(3).ok_or_else(bad)?;
+            for &n in counts {
+                words.nth(3).ok_or_else(bad)?;
+                for _ in 0..n {
+                    tags.push(words.next().and_then(|w| w.parse().ok()).ok_or_else(bad)?);
+                }
+                if n > 0 {
+                    words.nth(3 * n - 1).ok_or_else(bad)?;
+                }
+            }
+        }
+        Ok(tags)
+    }
+
     /// `$PhysicalNames`: `(dim, tag) -> name`.
     fn physical_names(&self, bytes: &[u8]) -> Result<HashMap<(i32, i32), String>> {
         let mut names = HashMap::new();
@@ -275,22 +337,13 @@ impl Reader {
                 nodes.num_nodes
             )));
         }
+        let counts: Vec<usize> = nodes.node_blocks.iter().map(|b| b.nodes.len()).collect();
+        let tags = self.node_tags(bytes, &counts)?;
         let mut coords: HashMap<u64, [f64; 3]> = HashMap::with_capacity(read);
-        let mut next_tag = nodes.min_node_tag;
-        for block in &nodes.node_blocks {
-            match &block.node_tags {
-                Some(tags) => {
-                    for (&tag, &i) in tags {
-                        let n = &block.nodes[i];
-                        coords.insert(tag, [n.x, n.y, n.z]);
-                    }
-                }
-                None => {
-                    for n in &block.nodes {
-                        coords.insert(next_tag, [n.x, n.y, n.z]);
-                        next_tag += 1;
-                    }
-                }
+        let in_file_order = nodes.node_blocks.iter().flat_map(|b| &b.nodes);
+        for (&tag, n) in tags.iter().zip(in_file_order) {
+            if coords.insert(tag, [n.x, n.y, n.z]).is_some() {
+                return Err(self.err(format!("node tag {tag} is defined twice in $Nodes")));
             }
         }
 
@@ -692,6 +745,46 @@ mod tests {
                 "cut at {cut}"
             );
         }
+    }
+
+    /// `two_hex.msh` with its `$Nodes` lines edited by `edit(tags, coords)` (13 each, in file
+    /// order).
+    fn two_hex_with_nodes(edit: impl FnOnce(&mut Vec<String>, &mut Vec<String>)) -> String {
+        let text = std::fs::read_to_string(data("two_hex.msh")).unwrap();
+        let lines: Vec<String> = text.lines().map(str::to_string).collect();
+        // "$Nodes", the section header, the block header, 13 tags, 13 coordinate lines.
+        let at = lines.iter().position(|l| l == "$Nodes").unwrap() + 3;
+        let mut tags = lines[at..at + 13].to_vec();
+        let mut coords = lines[at + 13..at + 26].to_vec();
+        edit(&mut tags, &mut coords);
+        let mut out = lines[..at].to_vec();
+        out.extend(tags);
+        out.extend(coords);
+        out.extend_from_slice(&lines[at + 26..]);
+        out.join("\n") + "\n"
+    }
+
+    #[test]
+    fn nodes_are_placed_by_their_tags_in_any_order() {
+        let original = read_msh(&data("two_hex.msh")).unwrap();
+        // Dense tags (1..13), the nodes of tags 1 and 6 listed in each other's place.
+        let swapped = two_hex_with_nodes(|tags, coords| {
+            tags.swap(0, 5);
+            coords.swap(0, 5);
+        });
+        assert!(swapped.contains("$Nodes\n1 13 1 13\n3 1 0 13\n6\n"));
+        let m = read_msh_bytes(swapped.as_bytes(), Path::new("swapped.msh")).unwrap();
+        assert_eq!(m.coords, original.coords);
+        assert_eq!(m.conn, original.conn);
+        // A tag defined twice (and 6 not at all): an error naming it.
+        let repeated = two_hex_with_nodes(|tags, _| tags[5] = "1".into());
+        let e = read_msh_bytes(repeated.as_bytes(), Path::new("repeated.msh"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("repeated.msh") && e.contains("node tag 1 is defined twice"),
+            "{e}"
+        );
     }
 
     /// Writes `mesh` as a binary MSH 4.1 file: one volume entity per body (physical group =

@@ -933,9 +933,55 @@ impl Mesh {
         format!("{} ({}, body '{body}')", label(e), self.types[e].name())
     }
 
+    /// Elements that share an edge (its two corner nodes) share its nodes, the same mid-edge
+    /// node or none, and quadrilateral faces that share their corners share their centre node
+    /// or have none: a linear element against a quadratic one (Hex8 against Hex20, Tet4 against
+    /// Tet10), a Hex20 face against a Hex27 one, or quadratic elements whose mid-edge nodes were
+    /// not merged would leave a crack in the body.
+    fn check_conforming(&self, label: &dyn Fn(usize) -> String) -> Result<()> {
+        let mismatch = |e: usize, other: usize, what: String| {
+            Error::Mesh(format!(
+                "{} and {} share {what} but not its nodes (mixed element orders or unmerged \
+                 nodes: the mesh would crack there)",
+                self.describe_element(other, label),
+                self.describe_element(e, label)
+            ))
+        };
+        let mut edges: HashMap<(usize, usize), (usize, Option<usize>)> = HashMap::new();
+        let mut faces: HashMap<[usize; 4], (usize, Option<usize>)> = HashMap::new();
+        for e in 0..self.num_elements() {
+            let kind = self.types[e];
+            let en = self.element_nodes(e);
+            for (k, &[a, b]) in kind.edges().iter().enumerate() {
+                let key = (en[a].min(en[b]), en[a].max(en[b]));
+                let mid = (kind.order() == 2).then(|| en[kind.num_corners() + k]);
+                let (other, theirs) = *edges.entry(key).or_insert((e, mid));
+                if theirs != mid {
+                    let what = format!("the edge between nodes {} and {}", key.0, key.1);
+                    return Err(mismatch(e, other, what));
+                }
+            }
+            if kind.is_hex() {
+                for f in 0..kind.num_faces() {
+                    let nodes = kind.face_nodes(f);
+                    let mut key = [en[nodes[0]], en[nodes[1]], en[nodes[2]], en[nodes[3]]];
+                    key.sort_unstable();
+                    let centre = (kind == ElementType::Hex27).then(|| en[20 + f]);
+                    let (other, theirs) = *faces.entry(key).or_insert((e, centre));
+                    if theirs != centre {
+                        let what = format!("the face with corner nodes {key:?}");
+                        return Err(mismatch(e, other, what));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// Validates the mesh: array lengths, connectivity indices, element node counts, body and
-    /// set indices, finite coordinates, and a positive Jacobian determinant at every node and
-    /// the centre of every element. Element indices in messages are 0-based.
+    /// set indices, finite coordinates, conforming elements (shared edges and faces share
+    /// their nodes), and a positive Jacobian determinant at every node and the centre of every
+    /// element. Element indices in messages are 0-based.
     pub fn check(&self) -> Result<()> {
         self.check_labelled(&|e| format!("element {e}"))
     }
@@ -1031,6 +1077,7 @@ impl Mesh {
                 }
             }
         }
+        self.check_conforming(label)?;
         // Jacobians at the nodes and the centre.
         let mut dn = vec![[0.0; 3]; 27];
         let mut points: HashMap<ElementType, Vec<[f64; 3]>> = HashMap::new();
@@ -1077,6 +1124,44 @@ impl Mesh {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Two elements of a `kind` box sharing a face, the first cut down to its first `keep`
+    /// nodes and made a `first` (Hex27 -> Hex20 -> Hex8 keep the leading nodes, VTK's order).
+    fn two_with_first_as(kind: ElementType, first: ElementType) -> Mesh {
+        let mut m = box_mesh(kind, [2, 1, 1], [0.0; 3], [2.0, 1.0, 1.0], "b");
+        let keep = first.num_nodes();
+        let mut conn = m.element_nodes(0)[..keep].to_vec();
+        conn.extend_from_slice(m.element_nodes(1));
+        m.types[0] = first;
+        m.offsets = vec![0, keep, conn.len()];
+        m.conn = conn;
+        m
+    }
+
+    #[test]
+    fn elements_of_mixed_orders_sharing_nodes_are_refused() {
+        let e = two_with_first_as(ElementType::Hex20, ElementType::Hex8)
+            .check()
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("element 0 (hex8") && e.contains("element 1 (hex20") && e.contains("edge"),
+            "{e}"
+        );
+        // The same edges, but a face with a centre node on one side only.
+        let e = two_with_first_as(ElementType::Hex27, ElementType::Hex20)
+            .check()
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("hex20") && e.contains("hex27") && e.contains("face"),
+            "{e}"
+        );
+        // The control: both kept whole.
+        two_with_first_as(ElementType::Hex27, ElementType::Hex27)
+            .check()
+            .unwrap();
+    }
 
     const ALL: [ElementType; 5] = ElementType::ALL;
 

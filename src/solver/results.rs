@@ -324,7 +324,8 @@ impl Results {
     ///   `traction` (p_A nu_A + t_T), `status` (0 open, 1 stick, 2 slip) and `a` (a_A).
     ///
     /// At nodes that carry no traction (mid-nodes under scheme 2) the tractions and pressure are
-    /// interpolated by the scheme's functions; the other fields are zero there.
+    /// interpolated by the scheme's functions, `status` is -1 (no traction unknown: not
+    /// "open"), and the other fields are zero there.
     pub fn write_interfaces(
         &mut self,
         scene: &Scene,
@@ -397,7 +398,7 @@ impl Results {
                     row_field("slip", 3, &slip, false),
                     row_field("traction_t", 3, &traction_t, true),
                     row_field("traction", 3, &traction, true),
-                    row_field("status", 1, &status, false),
+                    row_field("status", 1, &status, false).absent_as(-1.0),
                     row_field("a", 1, &area, false),
                 ];
                 let stem = format!("{}_{}_pass{}", self.case, iface.name, p + 1);
@@ -705,6 +706,7 @@ fn row_field<'a>(
         components,
         values,
         interpolate,
+        absent: 0.0,
     }
 }
 
@@ -715,8 +717,16 @@ struct RowField<'a> {
     /// `components` values per row.
     values: &'a [f64],
     /// At nodes without a traction unknown (mid-nodes under scheme 2), the field interpolated
-    /// by the scheme's traction functions; otherwise zero there.
+    /// by the scheme's traction functions; otherwise `absent` there.
     interpolate: bool,
+    absent: f64,
+}
+
+impl RowField<'_> {
+    /// The value written at nodes without a traction unknown, when not interpolated.
+    fn absent_as(self, absent: f64) -> Self {
+        RowField { absent, ..self }
+    }
 }
 
 /// One interface side as a VTU piece: the faces that carried the tractions (reference
@@ -795,6 +805,9 @@ fn write_interface_piece(
             let nc = fld.components;
             let mut out = vec![0.0; nc * n];
             for (&node, &k) in &index {
+                if !fld.interpolate {
+                    out[nc * k..nc * (k + 1)].fill(fld.absent);
+                }
                 if let Some(&r) = row_of.get(&node) {
                     out[nc * k..nc * (k + 1)].copy_from_slice(&fld.values[nc * r..nc * (r + 1)]);
                 } else if fld.interpolate && counts[k] > 0.0 {
