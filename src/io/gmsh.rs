@@ -113,6 +113,21 @@ struct Reader {
     file: PathBuf,
 }
 
+/// How the file stores its data, from the `$MeshFormat` line (checked by
+/// `Reader::check_header`): binary or not, and the size of a `size_t`.
+fn storage(bytes: &[u8]) -> (bool, usize) {
+    let format: Vec<String> = bytes
+        .split(|&b| b == b'\n')
+        .map(|l| String::from_utf8_lossy(l).trim().to_string())
+        .skip_while(|l| l != "$MeshFormat")
+        .nth(1)
+        .map(|l| l.split_whitespace().map(str::to_string).collect())
+        .unwrap_or_default();
+    let binary = format.get(1).is_some_and(|t| t == "1");
+    let size_t = format.get(2).and_then(|d| d.parse().ok()).unwrap_or(8);
+    (binary, size_t)
+}
+
 /// Lines of the ASCII prologue of a file (up to the first section with binary content).
 fn prologue_lines(bytes: &[u8]) -> impl Iterator<Item = &str> {
     bytes
@@ -182,21 +197,17 @@ impl Reader {
     /// (`size_t` of the data size, `int` of 4 bytes, coordinates of 8).
     fn node_tags(&self, bytes: &[u8], counts: &[usize]) -> Result<Vec<u64>> {
         let bad = || self.err("cannot read the node tags of $Nodes");
-        let format: Vec<String> = bytes
-            .split(|&b| b == b'\n')
-            .map(|l| String::from_utf8_lossy(l).trim().to_string())
-            .skip_while(|l| l != "$MeshFormat")
-            .nth(1)
-            .map(|l| l.split_whitespace().map(str::to_string).collect())
-            .unwrap_or_default();
-        let binary = format.get(1).is_some_and(|t| t == "1");
-        let size_t: usize = format.get(2).and_then(|d| d.parse().ok()).unwrap_or(8);
-        let marker = b"$Nodes\n";
-        let start = bytes
-            .windows(marker.len())
-            .enumerate()
-            .find(|(i, w)| *w == marker && (*i == 0 || bytes[i - 1] == b'\n'))
-            .map(|(i, _)| i + marker.len())
+        let (binary, size_t) = storage(bytes);
+        // The section's first line, "$Nodes" (with a CR in a file of CRLF lines).
+        let start = [&b"$Nodes\n"[..], &b"$Nodes\r\n"[..]]
+            .iter()
+            .find_map(|marker| {
+                bytes
+                    .windows(marker.len())
+                    .enumerate()
+                    .find(|(i, w)| w == marker && (*i == 0 || bytes[i - 1] == b'\n'))
+                    .map(|(i, _)| i + marker.len())
+            })
             .ok_or_else(bad)?;
         let body = &bytes[start..];
         let total: usize = counts.iter().sum();
@@ -235,6 +246,27 @@ impl Reader {
             }
         }
         Ok(tags)
+    }
+
+    /// True when the binary file's check integer (the `int` 1 after the `$MeshFormat` line)
+    /// reads 1 in little-endian order, the order [`Reader::node_tags`] reads.
+    fn little_endian(&self, bytes: &[u8]) -> bool {
+        let Some(mut at) = bytes
+            .windows(11)
+            .position(|w| w == b"$MeshFormat".as_slice())
+        else {
+            return false;
+        };
+        // Past the end of the "$MeshFormat" line and of the "4.1 1 8" line.
+        for _ in 0..2 {
+            let Some(end) = bytes[at..].iter().position(|&b| b == b'\n') else {
+                return false;
+            };
+            at += end + 1;
+        }
+        bytes
+            .get(at..at + 4)
+            .is_some_and(|b| b == 1i32.to_le_bytes().as_slice())
     }
 
     /// `$PhysicalNames`: `(dim, tag) -> name`.
@@ -320,6 +352,12 @@ impl Reader {
 
     fn read(&self, bytes: &[u8]) -> Result<Mesh> {
         self.check_header(bytes)?;
+        if storage(bytes).0 && !self.little_endian(bytes) {
+            return Err(self.err(
+                "a big-endian binary file is not supported (write it on a little-endian \
+                 machine, or as ASCII)",
+            ));
+        }
         let names = self.physical_names(bytes)?;
         let msh = self.parse(bytes)?;
         let data = msh.data;
@@ -776,6 +814,10 @@ mod tests {
         let m = read_msh_bytes(swapped.as_bytes(), Path::new("swapped.msh")).unwrap();
         assert_eq!(m.coords, original.coords);
         assert_eq!(m.conn, original.conn);
+        // The same file with CRLF line ends.
+        let crlf = swapped.replace('\n', "\r\n");
+        let m = read_msh_bytes(crlf.as_bytes(), Path::new("crlf.msh")).unwrap();
+        assert_eq!(m.coords, original.coords);
         // A tag defined twice (and 6 not at all): an error naming it.
         let repeated = two_hex_with_nodes(|tags, _| tags[5] = "1".into());
         let e = read_msh_bytes(repeated.as_bytes(), Path::new("repeated.msh"))
@@ -889,6 +931,31 @@ mod tests {
             write_binary(&m, &path);
             let r = read_msh(&path).unwrap();
             let bytes = std::fs::read(&path).unwrap();
+            // The check integer in big-endian order: refused, not misread.
+            let check = b"4.1 1 8\n\x01\x00\x00\x00";
+            let at = bytes.windows(check.len()).position(|w| w == check).unwrap();
+            let mut big = bytes.clone();
+            big[at + 8..at + 12].copy_from_slice(&1i32.to_be_bytes());
+            let e = read_msh_bytes(&big, Path::new("big.msh"))
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("big.msh") && e.contains("big-endian"), "{e}");
+            // The first two nodes of the first block listed in each other's place (dense tags
+            // out of order): the same mesh.
+            let nodes = bytes.windows(7).position(|w| w == b"$Nodes\n").unwrap() + 7;
+            let block = nodes + 4 * 8;
+            let count = u64::from_le_bytes(bytes[block + 12..block + 20].try_into().unwrap());
+            let (tags, coords) = (block + 20, block + 20 + 8 * count as usize);
+            let mut swapped = bytes.clone();
+            for (start, len) in [(tags, 8), (coords, 24)] {
+                let (first, second) = (start..start + len, start + len..start + 2 * len);
+                swapped[first.clone()].copy_from_slice(&bytes[second.clone()]);
+                swapped[second].copy_from_slice(&bytes[first]);
+            }
+            assert_ne!(swapped, bytes);
+            let s = read_msh_bytes(&swapped, Path::new("swapped.msh")).unwrap();
+            assert_eq!(s.coords, r.coords, "{kind:?}");
+            assert_eq!(s.conn, r.conn, "{kind:?}");
             std::fs::remove_file(&path).ok();
             for cut in (0..bytes.len()).step_by(53) {
                 let e = read_msh_bytes(&bytes[..cut], Path::new("cut.msh"));
