@@ -760,12 +760,8 @@ impl Study {
             }
         };
         let out = &opts.out_dir;
-        if rank == 0 {
-            std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
-        }
-        let started = Instant::now();
-        let total = self.variants.len() * self.refinements.len();
         let job_size = petsc.size();
+        // (Before the output folder is made: a refused study leaves nothing behind.)
         if let Some((i, v)) = self
             .variants
             .iter()
@@ -782,6 +778,11 @@ impl Study {
                 ),
             });
         }
+        if rank == 0 {
+            std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+        }
+        let started = Instant::now();
+        let total = self.variants.len() * self.refinements.len();
         say(format!(
             "mortar study {}: {} variant(s) x {} refinement(s) = {total} runs of {} on {} \
              rank(s) -> {}",

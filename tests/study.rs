@@ -1262,3 +1262,19 @@ fn curves_count_the_defaults_at_the_last_level() {
     let s = common::summary(&dir.join("out"));
     assert_eq!(s["metrics"]["default_on_front"], 1.0, "{s}");
 }
+
+/// A variant that asks for more ranks than the job has: one error line naming its key, and no
+/// output folder left behind.
+#[test]
+fn a_variant_on_more_ranks_than_the_job_is_refused_cleanly() {
+    let study = study_with_a_failing_variant("", "wide")
+        .replace("petsc = \"-ksp_type no_such_solver\"", "ranks = 2");
+    assert!(study.contains("ranks = 2"));
+    let dir = study_dir("study_too_many_ranks", &study);
+    let line = one_error_line(&run_study(&dir, &["-q"]));
+    assert!(line.contains("variant[1].ranks = 2"), "{line}");
+    assert!(
+        !dir.join("out").exists(),
+        "an output folder was left behind"
+    );
+}
