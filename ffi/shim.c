@@ -1,5 +1,5 @@
-/* Values and calls that PETSc and OpenMPI expose only as macros, and glibc's malloc_trim. No logic lives
- * here. */
+/* Values and calls that PETSc and OpenMPI expose only as macros, and glibc's malloc_trim. No
+ * logic lives here. */
 #include <malloc.h>
 #include <petscsys.h>
 #include <mpi.h>
