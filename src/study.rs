@@ -113,8 +113,8 @@
 //!
 //! # Outputs (in `--out DIR`, default `out/<study name>`; written by rank 0)
 //!
-//! - `runs/<variant>/<level>/`: each run's own outputs (`level` = index of the refinement). With
-//!   `[curves]`, a `history.csv` left there by an earlier study is removed before the run.
+//! - `runs/<variant>/<level>/`: each run's own outputs (`level` = index of the refinement),
+//!   emptied before the run, so that nothing an earlier study left there passes for its own.
 //! - `study.csv`: one row per run, rewritten after every run: `variant, level, h, ranks,
 //!   error` (the metric, or the largest of the metrics; with `finest_reference` the relative
 //!   difference to the finest run's, rewritten once every run is done; empty for a failed

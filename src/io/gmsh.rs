@@ -194,10 +194,15 @@ impl Reader {
     /// them). `mshio` keeps a block's tags only when the file's tags are not dense, and then
     /// in a map, where a repeated tag overwrites; a file whose dense tags are not in order, or
     /// that repeats a tag, would be misread. So the tags are read here, in ASCII as in binary
-    /// (`size_t` of the data size, `int` of 4 bytes, coordinates of 8).
-    fn node_tags(&self, bytes: &[u8], counts: &[usize]) -> Result<Vec<u64>> {
+    /// (`stored`: binary or not and the `size_t` size, from [`storage`]; `int` of 4 bytes,
+    /// coordinates of 8).
+    fn node_tags(
+        &self,
+        bytes: &[u8],
+        (binary, size_t): (bool, usize),
+        counts: &[usize],
+    ) -> Result<Vec<u64>> {
         let bad = || self.err("cannot read the node tags of $Nodes");
-        let (binary, size_t) = storage(bytes);
         // The section's first line, "$Nodes" (with a CR in a file of CRLF lines).
         let start = [&b"$Nodes\n"[..], &b"$Nodes\r\n"[..]]
             .iter()
@@ -352,7 +357,8 @@ impl Reader {
 
     fn read(&self, bytes: &[u8]) -> Result<Mesh> {
         self.check_header(bytes)?;
-        if storage(bytes).0 && !self.little_endian(bytes) {
+        let stored = storage(bytes);
+        if stored.0 && !self.little_endian(bytes) {
             return Err(self.err(
                 "a big-endian binary file is not supported (write it on a little-endian \
                  machine, or as ASCII)",
@@ -376,7 +382,7 @@ impl Reader {
             )));
         }
         let counts: Vec<usize> = nodes.node_blocks.iter().map(|b| b.nodes.len()).collect();
-        let tags = self.node_tags(bytes, &counts)?;
+        let tags = self.node_tags(bytes, stored, &counts)?;
         let mut coords: HashMap<u64, [f64; 3]> = HashMap::with_capacity(read);
         let in_file_order = nodes.node_blocks.iter().flat_map(|b| &b.nodes);
         for (&tag, n) in tags.iter().zip(in_file_order) {

@@ -803,11 +803,8 @@ fn write_interface_piece(
         .iter()
         .map(|fld| {
             let nc = fld.components;
-            let mut out = vec![0.0; nc * n];
+            let mut out = vec![if fld.interpolate { 0.0 } else { fld.absent }; nc * n];
             for (&node, &k) in &index {
-                if !fld.interpolate {
-                    out[nc * k..nc * (k + 1)].fill(fld.absent);
-                }
                 if let Some(&r) = row_of.get(&node) {
                     out[nc * k..nc * (k + 1)].copy_from_slice(&fld.values[nc * r..nc * (r + 1)]);
                 } else if fld.interpolate && counts[k] > 0.0 {
