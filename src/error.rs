@@ -39,6 +39,10 @@ pub enum Error {
     /// An invalid PETSc option (the same on every rank).
     #[error("PETSc options ({source_name}): {msg}")]
     Options { source_name: String, msg: String },
+    /// Output files that could not be written, agreed on by every rank (the first failing
+    /// rank's error: path and reason).
+    #[error("output: {0}")]
+    Output(String),
     /// A physical failure inside a solve (inverted element, NaN, diverged Newton).
     #[error("solve: {0}")]
     Solve(String),
@@ -64,6 +68,7 @@ impl Error {
                 | Error::Mesh(_)
                 | Error::Gmsh { .. }
                 | Error::Options { .. }
+                | Error::Output(_)
                 | Error::Solve(_)
                 | Error::Expectation(_)
         )

@@ -93,10 +93,37 @@ fn collective_failures_on_two_ranks_report_once() {
     }
 }
 
-/// An error on one rank only (its VTU path is a directory) aborts the job at once, naming the
-/// rank, instead of leaving the other rank waiting in a collective call.
+/// A step that fails on inverted elements names the same element, with its det F, on 1 and on
+/// 2 ranks: the lowest inverted element of all ranks (each rank used to name its own first,
+/// and 2 ranks the larger of the two, some without det F: "on another rank").
 #[test]
-fn a_rank_local_failure_aborts_instead_of_hanging() {
+fn a_failed_step_names_the_same_element_on_one_and_two_ranks() {
+    let failing = common::compressed_block_no_predictor("hex8", 0.6, 1)
+        .replace("count = 1", "count = 1\nmax_cuts = 0");
+    let case = common::write_case("inverted_on_ranks", &failing);
+    let messages: Vec<String> = [1, 2]
+        .iter()
+        .map(|&ranks| {
+            let out_dir = case.parent().unwrap().join(format!("out_{ranks}"));
+            let out = common::run_raw(&case, ranks, &out_dir, &["-q"]);
+            assert_ne!(out.status.code(), Some(0));
+            let s = common::summary(&out_dir);
+            s["message"].as_str().unwrap().to_string()
+        })
+        .collect();
+    assert!(
+        messages[0].contains("inverted (det F = "),
+        "{}",
+        messages[0]
+    );
+    assert_eq!(messages[0], messages[1]);
+}
+
+/// A write that fails on one rank only (its VTU piece's path is a directory) is agreed on by
+/// the ranks at the end of the step's output (`solver::results`): one error line, naming the
+/// file, and no hang (it used to print `[rank 1] ...` and abort the job through MPI).
+#[test]
+fn a_rank_local_write_failure_is_reported_once() {
     let case = common::write_case(
         "two_rank_local_error",
         &common::thick_sphere_case("hex8", 2),
@@ -112,7 +139,31 @@ fn a_rank_local_failure_aborts_instead_of_hanging() {
     assert!(secs < 150, "took {secs} s");
     let lines = error_lines(&out);
     assert_eq!(lines.len(), 1, "{lines:?}");
-    assert!(lines[0].contains("[rank 1]"), "{}", lines[0]);
+    assert!(
+        lines[0].starts_with("mortar: error: output: ")
+            && lines[0].contains("thick_sphere_0001_r1.vtu"),
+        "{}",
+        lines[0]
+    );
+}
+
+/// An output folder that cannot be made (`--out` names a file) on 2 ranks: one line naming
+/// it, before any step (it used to come from each rank, after the whole set-up).
+#[test]
+fn an_output_folder_that_cannot_be_made_is_reported_once() {
+    let case = common::write_case("two_rank_out_file", &common::thick_sphere_case("hex8", 1));
+    let out_file = case.parent().unwrap().join("results");
+    std::fs::write(&out_file, "not a folder").unwrap();
+    let out = common::run_raw(&case, 2, &out_file, &["-q"]);
+    assert_ne!(out.status.code(), Some(0));
+    assert_ne!(out.status.code(), Some(110), "timed out");
+    let lines = error_lines(&out);
+    assert_eq!(lines.len(), 1, "{lines:?}");
+    assert!(
+        lines[0].starts_with("mortar: error: output: ") && lines[0].contains("results/vtu"),
+        "{}",
+        lines[0]
+    );
 }
 
 /// A `-log_view` file rank 0 cannot write fails inside `PetscFinalize` on that rank alone,

@@ -143,6 +143,89 @@ fn the_predictor_reuses_no_factorization_of_a_failed_attempt() {
     assert!(d < 1e-8, "last_newton against converged after cuts: {d:e}");
 }
 
+/// A rerun into the same folder first removes what the earlier run of the case wrote there
+/// (`solver::results`): a run of 3 steps with two passes, then one of 2 steps with one pass,
+/// leaves exactly the second run's files (no third step, no second pass's series, no temporary
+/// file of a killed write) beside a file of the user's, which stays. (The earlier run's step 3
+/// and second pass used to stay, and a PVD of theirs opened as if it were the new run's.)
+#[test]
+fn a_rerun_replaces_the_earlier_outputs() {
+    let two_passes = common::slide_case(3).replace("friction = 0.3", "friction = 0.3\npasses = 2");
+    let case = common::write_case("rerun_outputs", &two_passes);
+    let (out, _) = common::run_case(&case, 1, &["-q"]);
+    let name = common::summary(&out)["case"].as_str().unwrap().to_string();
+    assert!(out.join(format!("{name}_slide_pass2.pvd")).is_file());
+    assert!(out.join(format!("{name}_0003.pvtu")).is_file());
+    std::fs::write(out.join("notes.txt"), "the user's").unwrap();
+    std::fs::write(out.join(format!(".{name}.pvd.12345.tmp")), "killed").unwrap();
+
+    std::fs::write(&case, common::slide_case(2)).unwrap();
+    let (again, _) = common::run_case(&case, 1, &["-q"]);
+    assert_eq!(again, out);
+    let files = |dir: &std::path::Path| -> std::collections::BTreeSet<String> {
+        std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect()
+    };
+    let named = |names: &[&str]| -> std::collections::BTreeSet<String> {
+        names.iter().map(|n| n.replace("{c}", &name)).collect()
+    };
+    assert_eq!(
+        files(&out),
+        named(&[
+            "summary.json",
+            "history.csv",
+            "displacement.csv",
+            "notes.txt",
+            "vtu",
+            "{c}.pvd",
+            "{c}_0001.pvtu",
+            "{c}_0002.pvtu",
+            "{c}_slide_pass1.pvd",
+        ])
+    );
+    assert_eq!(
+        files(&out.join("vtu")),
+        named(&[
+            "{c}_0001_r0.vtu",
+            "{c}_0002_r0.vtu",
+            "{c}_slide_pass1_0001.vtu",
+            "{c}_slide_pass1_0002.vtu",
+        ])
+    );
+}
+
+/// A reader that stops early (`mortar run ... | head -1`) ends the run as it ends any program,
+/// without PETSc's crash report ("Caught signal number 13 Broken Pipe ... Try option
+/// -start_in_debugger", which it used to print) and without a panic.
+#[test]
+fn a_closed_stdout_ends_the_run_quietly() {
+    use std::io::BufRead;
+    let case = common::write_case("closed_stdout", &common::slide_case(5));
+    let out_dir = case.parent().unwrap().join("out");
+    let mut child = common::mortar_command()
+        .arg("run")
+        .arg(&case)
+        .arg("--out")
+        .arg(&out_dir)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut first = String::new();
+    std::io::BufReader::new(child.stdout.take().unwrap())
+        .read_line(&mut first)
+        .unwrap();
+    assert!(first.starts_with("mortar: "), "{first}");
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !stderr.contains("Caught signal") && !stderr.contains("panicked"),
+        "{stderr}"
+    );
+}
+
 /// With no cuts allowed the same scene fails: one clear line, exit 1, and a summary that says
 /// so (finished steps, none here, stay on disk).
 #[test]

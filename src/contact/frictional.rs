@@ -112,10 +112,11 @@
 //! A tangent linearizes only the pairs whose secondary face carries a node the law presses
 //! (`ContactPass::pressed_faces`, from the residual's weights as above): an open node has no
 //! tangent block, so the derivatives of a face without a pressed node would go unused. The
-//! tangent is unchanged, bit for bit; where the surfaces the search pairs are larger than the
-//! contact zone the linearized kernel, the costliest part of the contact work, shrinks with it
+//! tangent is unchanged, bit for bit; where the contact zone is smaller than the surfaces the
+//! search pairs, the linearized kernel (the costliest part of the contact work) shrinks with it
 //! (measured on `cases/hertz`: the mortar integration 3.0 s -> 0.95 s, the run 9.6 s -> 7.4 s,
-//! every output the same).
+//! every output the same). The derivatives of the other faces are neither computed nor
+//! checked: a non-finite one no longer stops the evaluation (it would have gone unused).
 //!
 //! # Uzawa
 //!
@@ -438,6 +439,10 @@ struct PairData {
     w: LinearizedWeights,
 }
 
+/// Traction nodes (indices into a pass's nodes) with their pairs and their traction index in
+/// each pair's secondary face ([`ContactPass::pairs_by_node`]).
+type ByNode<'p> = BTreeMap<usize, Vec<(&'p PairData, usize)>>;
+
 /// The secondary faces whose pairs a tangent evaluation linearizes.
 #[derive(Clone, Copy)]
 enum Linearize {
@@ -677,13 +682,19 @@ impl ContactInterfaces {
                             .time(|| pass.pressed_faces(&ctx, &normals, &kinematics)),
                         Linearize::EveryFace => pass.local_faces.clone(),
                     };
-                    let candidates = timed
-                        .search
-                        .time(|| pass.candidates(&x, &faces, EVAL_MARGIN));
+                    // (No pressed node: no search either.)
+                    let candidates = if faces.is_empty() {
+                        Vec::new()
+                    } else {
+                        timed
+                            .search
+                            .time(|| pass.candidates(&x, &faces, EVAL_MARGIN))
+                    };
                     let mut own = RejectStats::default();
                     let integrate = || pass.integrate(&ctx, candidates, true, &mut own);
                     let pairs = timed.integration.time(integrate);
-                    // The pairs are counted by the residual's weights; only derivatives that
+                    // The pairs are counted by the residual's weights; only derivatives (of
+                    // the linearized faces: the others' are neither computed nor checked) that
                     // are not finite where the values are stop the evaluation.
                     if own.non_finite > 0 {
                         return Ok(Some(non_finite(&iface.name)));
@@ -1541,11 +1552,7 @@ impl ContactPass {
 
     /// The pairs carrying each of `nodes` (indices into `self.nodes`), with the traction index
     /// `k` of the node in the pair's secondary face.
-    fn pairs_by_node<'p>(
-        &self,
-        pairs: &'p [PairData],
-        nodes: &[usize],
-    ) -> BTreeMap<usize, Vec<(&'p PairData, usize)>> {
+    fn pairs_by_node<'p>(&self, pairs: &'p [PairData], nodes: &[usize]) -> ByNode<'p> {
         let wanted: std::collections::BTreeSet<usize> = nodes.iter().copied().collect();
         let mut out: BTreeMap<usize, Vec<(&PairData, usize)>> = BTreeMap::new();
         for pair in pairs {
@@ -1560,15 +1567,11 @@ impl ContactPass {
 
     /// The held nodes' pairs in the residual's weights `values` ([`Self::pairs_by_node`]) and
     /// their [`Self::kinematics`]: the law's inputs of a residual and of a tangent.
-    #[allow(clippy::type_complexity)]
     fn measured<'p>(
         &self,
         ctx: &EvalContext,
         values: &'p [PairData],
-    ) -> (
-        BTreeMap<usize, Vec<(&'p PairData, usize)>>,
-        BTreeMap<usize, Kinematics>,
-    ) {
+    ) -> (ByNode<'p>, BTreeMap<usize, Kinematics>) {
         let measured = self.pairs_by_node(values, &self.held);
         let kinematics = measured
             .iter()
@@ -1670,7 +1673,7 @@ impl ContactPass {
     /// Forces (and tangent) of traction node `a` from its pairs `terms`, and its fields.
     /// `None` when the node carries no traction. `kin` is the node's [`Self::kinematics`]:
     /// of `terms` for a residual, of the residual's weights for a tangent (see
-    /// [`ContactInterfaces::assemble`]).
+    /// [`ContactInterfaces::assemble_linearizing`]).
     fn node_block(
         &self,
         ctx: &EvalContext,
@@ -2437,47 +2440,74 @@ friction = 0.3
         }
     }
 
-    /// The fade is 0 up to MIN_COVERAGE, 1 from FADE_COVERAGE on, increasing between, with a
-    /// continuous derivative that matches central differences (and is 0 at both ends).
     /// A tangent linearizes only the pairs of the faces that carry a pressed node
     /// ([`Linearize::PressedFaces`]), and its blocks are bit for bit those of a tangent that
-    /// linearizes every face: [`partly_covered_blocks`] with the upper block tilted about y
-    /// (lifted by `0.06 (x - 0.45)`), so that it presses the lower surface's nodes at x = 0.5
-    /// and stands 0.008 and 0.023 above those at x = 0.75 and 1, still over them: the faces
-    /// between x = 0.75 and 1 overlap the upper block and carry no pressed node. (Checked to
-    /// fail with every overlapping face linearized, and with one face per pressed node.)
+    /// linearizes every face, on each rank of 1 and of 2 (strips of held nodes, faces whose
+    /// nodes two ranks hold): [`partly_covered_blocks`]
+    /// - tilted: the upper block lifted by `0.06 (x - 0.45)` about y, so that it presses the
+    ///   lower surface's nodes at x = 0.5 and the fading ones at x = 0.25 (1-2 % covered), and
+    ///   stands over those at x = 0.75 and 1 (mean weighted gaps -0.008 and -0.018): the faces
+    ///   between x = 0.75 and 1 overlap the upper block and carry no pressed node, and on one
+    ///   rank those four are exactly the faces skipped;
+    /// - flush: the upper block lifted by 0.01, onto the lower surface, so that the covered
+    ///   nodes sit in the touching band (no pressure, a tangent: `dp/dgh > 0`).
+    ///
+    /// Checked to fail with every overlapping face linearized, with one face per pressed node,
+    /// with "pressed" read as `p > 0` (the touching band left out), and with the fading nodes
+    /// left out.
     #[test]
     fn tangent_linearizes_only_the_faces_of_pressed_nodes() {
         let scene = partly_covered_blocks();
-        let elements = vec![0; scene.mesh.num_elements()];
-        let dofs = DofMap::new(&scene.mesh, elements, 0, 1, &scene.constrained_mask());
-        let contact = ContactInterfaces::new(&scene, &dofs).unwrap();
         let mesh = &scene.mesh;
         let up = mesh.bodies.iter().position(|b| b == "up").unwrap();
-        let mut u = vec![0.0; 3 * mesh.num_nodes()];
-        for e in (0..mesh.num_elements()).filter(|&e| mesh.body[e] == up) {
-            for &n in mesh.element_nodes(e) {
-                u[3 * n + 2] = 0.06 * (mesh.coords[n][0] - 0.45);
+        let lifted = |lift: &dyn Fn(f64) -> f64| {
+            let mut u = vec![0.0; 3 * mesh.num_nodes()];
+            for e in (0..mesh.num_elements()).filter(|&e| mesh.body[e] == up) {
+                for &n in mesh.element_nodes(e) {
+                    u[3 * n + 2] = lift(mesh.coords[n][0]);
+                }
+            }
+            u
+        };
+        let tilted = lifted(&|x| 0.06 * (x - 0.45));
+        let flush = lifted(&|_| 0.01);
+        for (name, u) in [("tilted", &tilted), ("flush", &flush)] {
+            for (rank, ranks) in [(0, 1), (0, 2), (1, 2)] {
+                let elements = vec![0; mesh.num_elements()];
+                let dofs = DofMap::new(mesh, elements, rank, ranks, &scene.constrained_mask());
+                let contact = ContactInterfaces::new(&scene, &dofs).unwrap();
+                let blocks = |linearize| {
+                    let mut out: Vec<(Vec<usize>, Vec<u64>, Vec<u64>)> = Vec::new();
+                    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect();
+                    let failure = contact
+                        .assemble_linearizing(&scene, u, true, linearize, |b| {
+                            out.push((b.slots.clone(), bits(&b.force), bits(&b.tangent)));
+                            Ok(())
+                        })
+                        .unwrap();
+                    assert_eq!(failure, None, "{name}, rank {rank} of {ranks}");
+                    out
+                };
+                let pressed = blocks(Linearize::PressedFaces);
+                let every = blocks(Linearize::EveryFace);
+                let at = format!("{name}, rank {rank} of {ranks}");
+                assert!(pressed.iter().all(|b| !b.2.is_empty()), "{at}");
+                assert_eq!(pressed.len(), every.len(), "{at}: blocks");
+                if let Some(k) = (0..pressed.len()).find(|&k| pressed[k] != every[k]) {
+                    panic!("{at}: the block of slots {:?} differs", pressed[k].0);
+                }
+                if ranks == 1 {
+                    assert!(!pressed.is_empty(), "{at}: nothing pressed");
+                }
             }
         }
-        let blocks = |linearize| {
-            let mut out: Vec<(Vec<usize>, Vec<u64>, Vec<u64>)> = Vec::new();
-            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect();
-            let failure = contact
-                .assemble_linearizing(&scene, &u, true, linearize, |b| {
-                    out.push((b.slots.clone(), bits(&b.force), bits(&b.tangent)));
-                    Ok(())
-                })
-                .unwrap();
-            assert_eq!(failure, None);
-            out
-        };
-        let pressed = blocks(Linearize::PressedFaces);
-        assert!(!pressed.is_empty() && pressed.iter().all(|b| !b.2.is_empty()));
-        assert!(pressed == blocks(Linearize::EveryFace));
 
-        // The faces with an overlap but no pressed node: the column between x = 0.75 and 1.
-        let x = current_positions(&scene, &u);
+        // Tilted, one rank: the faces with an overlap but no pressed node are the four of the
+        // column between x = 0.75 and 1.
+        let elements = vec![0; mesh.num_elements()];
+        let dofs = DofMap::new(mesh, elements, 0, 1, &scene.constrained_mask());
+        let contact = ContactInterfaces::new(&scene, &dofs).unwrap();
+        let x = current_positions(&scene, &tilted);
         let iface = &contact.interfaces[0];
         let pass = &iface.passes[0];
         let ctx = iface.context(false, &x, &contact.x_old);
@@ -2495,13 +2525,14 @@ friction = 0.3
             .collect();
         let column = |s: &usize| {
             let xs = pass.sec_faces[*s].nodes.iter().map(|&n| mesh.coords[n][0]);
-            let (lo, hi) = xs.fold((f64::MAX, f64::MIN), |(l, h), v| (l.min(v), h.max(v)));
-            (lo, hi)
+            xs.fold((f64::MAX, f64::MIN), |(l, h), v| (l.min(v), h.max(v)))
         };
         assert_eq!(skipped.len(), 4, "skipped faces {skipped:?}");
         assert!(skipped.iter().all(|s| column(s) == (0.75, 1.0)));
     }
 
+    /// The fade is 0 up to MIN_COVERAGE, 1 from FADE_COVERAGE on, increasing between, with a
+    /// continuous derivative that matches central differences (and is 0 at both ends).
     #[test]
     fn coverage_fade_is_a_smooth_step() {
         assert_eq!(coverage_fade(0.0), (0.0, 0.0));

@@ -92,6 +92,10 @@ impl Petsc {
             Some(super::error::capture_error),
             std::ptr::null_mut()
         ))?;
+        // PETSc's signal handler reports a closed pipe (`mortar run ... | head`), a hang-up or
+        // a quit as a crash ("Caught signal number 13 Broken Pipe ... Try option
+        // -start_in_debugger"); without it these signals end the run as they end any program.
+        chk!(PetscPopSignalHandler())?;
         check_library_sizes()?;
         Ok(Petsc {
             _args: c_args,

@@ -116,9 +116,11 @@ impl EvalState {
 pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
     let world = petsc.world();
     let (rank, ranks) = (petsc.rank(), petsc.size());
+    // Progress goes to stdout; a closed stdout (a reader that stopped) does not stop the run.
     let say = |msg: String| {
         if rank == 0 && !opts.quiet {
-            println!("{msg}");
+            use std::io::Write;
+            let _ = writeln!(std::io::stdout(), "{msg}");
         }
     };
     let mut phases = Phases::new(&["setup", "assembly", "solve", "output"])?;
@@ -189,7 +191,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
     }
     let mut tangent_ready = false;
     let mut newton_tangent = NewtonTangent::Other;
-    let mut results = Results::new(scene, &opts.out_dir, rank, ranks)?;
+    let mut results = Results::new(scene, &opts.out_dir, rank, ranks, &world)?;
     drop(setup_guard);
     phases.add("setup", t_setup.elapsed().as_secs_f64());
     say(format!(
@@ -419,7 +421,8 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                     .unwrap_or_else(|| outcome.reason.to_string());
                 // Bounded in depth, not only in a row: fail/converge cycles cannot shrink the step
                 // below dt_nominal / 2^max_cuts.
-                let giving_up = cuts_in_row + 1 > scene.max_cuts || 0.5 * dt < dt_min;
+                let no_cuts_left = cuts_in_row + 1 > scene.max_cuts;
+                let giving_up = no_cuts_left || 0.5 * dt < dt_min;
                 // `steps.on_failure = "continue"`: with no cut left, a state Newton reached
                 // inside the domain is the step's (unconverged) result.
                 accepted_unconverged = giving_up
@@ -433,22 +436,33 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                     model.tying.set_multipliers(&multipliers);
                     model.contact.restore(&contact_saved);
                     let load_new = Load(t_new);
+                    // Which limit stopped the step: the cuts in a row, or its size (the
+                    // nominal step halved max_cuts times).
+                    let limit = if no_cuts_left {
+                        format!("no cuts left ({} allowed)", scene.max_cuts)
+                    } else {
+                        format!(
+                            "the step ({dt:.3e} of the load) is the smallest allowed \
+                             (steps.max_cuts = {})",
+                            scene.max_cuts
+                        )
+                    };
                     say(format!(
                         "  step {} load {load_new:.6}: not converged ({why}) after {} Newton its; {}",
                         step + 1,
                         outcome.iterations,
                         if giving_up {
-                            format!("no cuts left ({} allowed)", scene.max_cuts)
+                            limit.clone()
                         } else {
                             format!("cut {cuts_in_row}/{}", scene.max_cuts)
                         }
                     ));
                     if giving_up {
                         summary.message = Some(format!(
-                            "step {} (load {}) did not converge after {} cuts: {why}",
+                            "step {} (load {}) did not converge after {} cut(s), {limit}: {why}",
                             step + 1,
                             Load(t_new),
-                            scene.max_cuts
+                            cuts_in_row - 1
                         ));
                         break;
                     }
@@ -481,7 +495,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
             drop(s);
             let final_res = outcome.residual_history.last().copied().unwrap_or(0.0);
             if write_vtu {
-                results.write_interfaces(scene, &model, &s_u(&state), step, t, &world)?;
+                results.write_interfaces(scene, &model, &s_u(&state), step, t, &world);
             }
             results.push_history(&results::StepRow {
                 step,
@@ -501,7 +515,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                     (solve_seconds - assembly).max(0.0),
                     t_out.elapsed().as_secs_f64(),
                 ],
-            })?;
+            });
             model.contact.commit(scene, &s_u(&state));
             summary.steps.push(StepRecord {
                 step,
@@ -535,8 +549,9 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                     .iter()
                     .map(|(k, v)| (k.to_string(), *v))
                     .collect();
-                results.write_summary(&summary)?;
+                results.write_summary(&summary);
             }
+            results.agree(&world)?;
             cuts_in_row = 0;
             fallbacks_before = fallbacks;
             dt = (2.0 * dt).min(dt_nominal);
@@ -550,7 +565,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
             s.load(scene, &dofs, &x)?;
         }
         let s = state.borrow();
-        results.write_displacements(scene, &dofs, &s.u, &world)?;
+        results.write_displacements(scene, &dofs, &s.u, &world);
         for (k, v) in results.metrics(scene, &dofs, &model, &s.u, &world)? {
             summary.metrics.insert(k, v);
         }
@@ -614,8 +629,9 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
             .map(|(k, v)| (k.to_string(), *v))
             .collect();
         if rank == 0 {
-            results.write_summary(&summary)?;
+            results.write_summary(&summary);
         }
+        results.agree(&world)?;
         say(format!(
             "mortar: {} -> {}",
             match (summary.completed, unconverged) {
@@ -851,34 +867,60 @@ fn collective_domain_check(
     world: &mpi::topology::SimpleCommunicator,
     issue: Option<DomainIssue>,
 ) -> Result<(), CallbackError> {
-    let (element, contact) = match &issue {
-        Some(DomainIssue::Inverted(i)) => (i.element as i64 + 1, 0i64),
-        Some(DomainIssue::Contact(_)) => (0, 1),
-        None => (0, 0),
+    // The lowest inverted element of all ranks (each rank's first is its lowest: elements are
+    // visited in ascending order), with its det F from its owner; else the contact failure of
+    // the lowest rank that has one: the message does not depend on the partition.
+    let element = match &issue {
+        Some(DomainIssue::Inverted(i)) => i.element as i64,
+        _ => i64::MAX,
     };
-    let (mut g_element, mut g_contact) = (0i64, 0i64);
-    world.all_reduce_into(&element, &mut g_element, SystemOperation::max());
-    world.all_reduce_into(&contact, &mut g_contact, SystemOperation::max());
-    if g_element > 0 {
-        let detail = match &issue {
-            Some(DomainIssue::Inverted(i)) if i.element as i64 + 1 == g_element => {
-                format!("det F = {:.3e}", i.det)
-            }
-            _ => "on another rank".to_string(),
+    let mut lowest = i64::MAX;
+    world.all_reduce_into(&element, &mut lowest, SystemOperation::min());
+    if lowest != i64::MAX {
+        let det = match &issue {
+            Some(DomainIssue::Inverted(i)) if i.element as i64 == lowest => i.det,
+            _ => 0.0,
         };
+        let mut owner_det = 0.0;
+        world.all_reduce_into(&det, &mut owner_det, SystemOperation::sum());
         return Err(CallbackError::Domain(format!(
-            "element {} inverted ({detail})",
-            g_element - 1
+            "element {lowest} inverted (det F = {owner_det:.3e})"
         )));
     }
-    if g_contact > 0 {
-        let detail = match issue {
-            Some(DomainIssue::Contact(m)) => m,
-            _ => "on another rank".to_string(),
-        };
-        return Err(CallbackError::Domain(format!("contact: {detail}")));
+    let mine = match &issue {
+        Some(DomainIssue::Contact(m)) => Some(m.as_str()),
+        _ => None,
+    };
+    match first_rank_text(world, mine) {
+        Some(m) => Err(CallbackError::Domain(format!("contact: {m}"))),
+        None => Ok(()),
     }
-    Ok(())
+}
+
+/// Collective: the `text` of the lowest rank that has one, on every rank (`None` when no rank
+/// has one).
+pub(crate) fn first_rank_text(
+    world: &mpi::topology::SimpleCommunicator,
+    text: Option<&str>,
+) -> Option<String> {
+    use mpi::traits::{Communicator, Root};
+    let size = world.size();
+    let me = if text.is_some() { world.rank() } else { size };
+    let mut first = size;
+    world.all_reduce_into(&me, &mut first, SystemOperation::min());
+    if first == size {
+        return None;
+    }
+    let mut bytes = match text {
+        Some(t) if world.rank() == first => t.as_bytes().to_vec(),
+        _ => Vec::new(),
+    };
+    let root = world.process_at_rank(first);
+    let mut len = bytes.len() as u64;
+    root.broadcast_into(&mut len);
+    bytes.resize(len as usize, 0);
+    root.broadcast_into(&mut bytes[..]);
+    Some(String::from_utf8_lossy(&bytes).into_owned())
 }
 
 /// The norm of the residual at u = 0 under the full load: the force scale of the absolute

@@ -13,7 +13,17 @@
 //!   step (`node,x,y,z,ux,uy,uz`).
 //! - `summary.json`: see `io::output::Summary`.
 //!
-//! Every file is written atomically (temporary file, then rename).
+//! Every file is written atomically (temporary file, then rename). A run first removes from its
+//! folder the files an earlier run of the same case left there (the files above, named after
+//! the case, and the temporary files of writes a killed run left unfinished; nothing else), so
+//! that every output file describes this run: a rerun with fewer steps, passes or interfaces
+//! leaves no stale series behind, and a folder without `summary.json` holds a run that has not
+//! finished a step.
+//!
+//! A file that cannot be written (a full disk, a folder without write permission) is one
+//! rank's failure at first; every collective call of the step still runs on every rank, and the
+//! ranks agree on the failure at the end of the step's output ([`Results::agree`]), so that the
+//! run stops with one line, [`Error::Output`], on any number of ranks.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -63,15 +73,29 @@ pub struct Results {
     /// Time series of each interface pass, by file stem.
     interface_pvd: BTreeMap<String, Vec<(f64, String)>>,
     reaction_sets: Vec<(String, Vec<usize>)>,
+    /// The first write of this rank that failed since the last [`Results::agree`].
+    failed: Option<Error>,
 }
 
 const POINT_FIELDS: [(&str, usize); 1] = [("displacement", 3)];
 const CELL_FIELDS: [(&str, usize); 3] = [("cauchy_stress", 9), ("von_mises", 1), ("rank", 1)];
 
 impl Results {
-    /// Creates the output folders (rank 0) and the history columns.
-    pub fn new(scene: &Scene, dir: &Path, rank: usize, ranks: usize) -> Result<Results> {
-        std::fs::create_dir_all(dir.join("vtu")).map_err(|e| Error::io(dir, e))?;
+    /// Creates the output folders and removes an earlier run's outputs (rank 0; collective:
+    /// every rank returns the same [`Error::Output`] on failure), and sets the history columns.
+    pub fn new(
+        scene: &Scene,
+        dir: &Path,
+        rank: usize,
+        ranks: usize,
+        world: &mpi::topology::SimpleCommunicator,
+    ) -> Result<Results> {
+        let prepared = if rank == 0 {
+            prepare_folder(dir, &scene.name)
+        } else {
+            Ok(())
+        };
+        agree_on(world, prepared)?;
         let reaction_sets: Vec<(String, Vec<usize>)> = scene
             .reaction_sets
             .iter()
@@ -137,6 +161,7 @@ impl Results {
             pvd: Vec::new(),
             interface_pvd: BTreeMap::new(),
             reaction_sets,
+            failed: None,
         })
     }
 
@@ -213,7 +238,22 @@ impl Results {
             .collect()
     }
 
-    /// Writes this rank's VTU piece; after a barrier, rank 0 writes the PVTU and the PVD.
+    /// Keeps the first failed write (see [`Results::agree`]).
+    fn keep(&mut self, written: Result<()>) {
+        if let (None, Err(e)) = (&self.failed, written) {
+            self.failed = Some(e);
+        }
+    }
+
+    /// Collective: the ranks agree on the writes since the last call; when one failed, every
+    /// rank returns the first failing rank's error as [`Error::Output`].
+    pub fn agree(&mut self, world: &mpi::topology::SimpleCommunicator) -> Result<()> {
+        let failed = self.failed.take().map_or(Ok(()), Err);
+        agree_on(world, failed)
+    }
+
+    /// Writes this rank's VTU piece; once every rank has written its own (agreed on:
+    /// [`Results::agree`]), rank 0 writes the PVTU and the PVD.
     #[allow(clippy::too_many_arguments)]
     pub fn write_step(
         &mut self,
@@ -277,24 +317,29 @@ impl Results {
                 },
             ],
         };
-        let piece_name = |r: usize| format!("vtu/{}_{step:04}_r{r}.vtu", self.case);
-        write_vtu(&self.dir.join(piece_name(self.rank)), &piece)?;
-        world.barrier();
+        let case = self.case.clone();
+        let piece_name = |r: usize| format!("vtu/{case}_{step:04}_r{r}.vtu");
+        let written = write_vtu(&self.dir.join(piece_name(self.rank)), &piece);
+        self.keep(written);
+        self.agree(world)?;
         if self.rank == 0 {
             let pvtu = format!("{}_{step:04}.pvtu", self.case);
             let pieces: Vec<String> = (0..self.ranks).map(piece_name).collect();
-            write_pvtu(&self.dir.join(&pvtu), &pieces, &POINT_FIELDS, &CELL_FIELDS)?;
-            self.pvd.push((t, pvtu));
-            write_pvd(&self.dir.join(format!("{}.pvd", self.case)), &self.pvd)?;
+            let written = write_pvtu(&self.dir.join(&pvtu), &pieces, &POINT_FIELDS, &CELL_FIELDS)
+                .and_then(|()| {
+                    self.pvd.push((t, pvtu));
+                    write_pvd(&self.dir.join(format!("{}.pvd", self.case)), &self.pvd)
+                });
+            self.keep(written);
         }
         Ok(())
     }
 
-    /// Appends a history row (rank 0).
-    pub fn push_history(&mut self, r: &StepRow) -> Result<()> {
+    /// Appends a history row (rank 0; a failure is kept for [`Results::agree`]).
+    pub fn push_history(&mut self, r: &StepRow) {
         let set_u = self.set_displacements(r.u);
         let Some(h) = self.history.as_mut() else {
-            return Ok(());
+            return;
         };
         let mut row = vec![
             r.step as f64,
@@ -311,7 +356,8 @@ impl Results {
         row.extend(r.tracked.iter().flatten());
         row.extend(r.contact_forces.iter().flatten());
         row.extend(r.seconds);
-        h.push_row(row)
+        let written = h.push_row(row);
+        self.keep(written);
     }
 
     /// Writes every interface pass as its own VTU, with a PVD per interface and pass (rank 0):
@@ -334,7 +380,7 @@ impl Results {
         step: usize,
         t: f64,
         world: &mpi::topology::SimpleCommunicator,
-    ) -> Result<()> {
+    ) {
         for (i, tied) in model.tying.interfaces.iter().enumerate() {
             for (p, pass) in tied.passes.iter().enumerate() {
                 let (traction, gap) = model.tying.pass_fields(i, p, u, world);
@@ -357,7 +403,7 @@ impl Results {
                     row_field("a", 1, &area, false),
                 ];
                 let stem = format!("{}_{}_pass{}", self.case, tied.name, p + 1);
-                self.write_interface_step(
+                let written = self.write_interface_step(
                     scene,
                     &stem,
                     tied.scheme,
@@ -367,7 +413,8 @@ impl Results {
                     u,
                     step,
                     t,
-                )?;
+                );
+                self.keep(written);
             }
         }
         for (i, iface) in model.contact.interfaces.iter().enumerate() {
@@ -402,7 +449,7 @@ impl Results {
                     row_field("a", 1, &area, false),
                 ];
                 let stem = format!("{}_{}_pass{}", self.case, iface.name, p + 1);
-                self.write_interface_step(
+                let written = self.write_interface_step(
                     scene,
                     &stem,
                     iface.scheme,
@@ -412,10 +459,10 @@ impl Results {
                     u,
                     step,
                     t,
-                )?;
+                );
+                self.keep(written);
             }
         }
-        Ok(())
     }
 
     /// One interface pass at one step: its VTU and its PVD (rank 0).
@@ -439,23 +486,24 @@ impl Results {
         write_pvd(&self.dir.join(format!("{stem}.pvd")), series)
     }
 
-    /// Writes summary.json (rank 0 only).
-    pub fn write_summary(&self, summary: &Summary) -> Result<()> {
+    /// Writes summary.json (rank 0 only; a failure is kept for [`Results::agree`]).
+    pub fn write_summary(&mut self, summary: &Summary) {
         if self.rank == 0 {
-            summary.write(&self.dir.join("summary.json"))?;
+            let written = summary.write(&self.dir.join("summary.json"));
+            self.keep(written);
         }
-        Ok(())
     }
 
     /// Writes `displacement.csv` (rank 0): `node,x,y,z,ux,uy,uz` for every node, reference
-    /// coordinates and displacements of the last converged step, gathered from the owners.
+    /// coordinates and displacements of the last converged step, gathered from the owners
+    /// (collective; a failed write is kept for [`Results::agree`]).
     pub fn write_displacements(
-        &self,
+        &mut self,
         scene: &Scene,
         dofs: &DofMap,
         u: &[f64],
         world: &mpi::topology::SimpleCommunicator,
-    ) -> Result<()> {
+    ) {
         let mut mine = vec![0.0; u.len()];
         for &n in dofs
             .local_nodes
@@ -467,7 +515,7 @@ impl Results {
         let mut all = vec![0.0; u.len()];
         world.all_reduce_into(&mine[..], &mut all[..], SystemOperation::sum());
         if self.rank != 0 {
-            return Ok(());
+            return;
         }
         let mut csv = String::from("node,x,y,z,ux,uy,uz\n");
         for (n, x) in scene.mesh.coords.iter().enumerate() {
@@ -477,7 +525,9 @@ impl Results {
                 x[0], x[1], x[2], d[0], d[1], d[2]
             ));
         }
-        crate::io::output::write_atomic(&self.dir.join("displacement.csv"), csv.as_bytes())
+        let written =
+            crate::io::output::write_atomic(&self.dir.join("displacement.csv"), csv.as_bytes());
+        self.keep(written);
     }
 
     /// The scene's verification metrics, reduced over ranks.
@@ -846,4 +896,109 @@ fn write_interface_piece(
         cell_data: vec![],
     };
     write_vtu(path, &piece)
+}
+
+/// Creates `dir/vtu` and removes the outputs an earlier run of case `case` left in `dir`
+/// ([`is_run_output`]); other files are left alone.
+fn prepare_folder(dir: &Path, case: &str) -> Result<()> {
+    let vtu = dir.join("vtu");
+    std::fs::create_dir_all(&vtu).map_err(|e| Error::io(&vtu, e))?;
+    for (folder, in_vtu) in [(dir, false), (vtu.as_path(), true)] {
+        let entries = std::fs::read_dir(folder).map_err(|e| Error::io(folder, e))?;
+        for entry in entries {
+            let entry = entry.map_err(|e| Error::io(folder, e))?;
+            let is_file = entry.file_type().is_ok_and(|t| t.is_file());
+            let name = entry.file_name();
+            if is_file
+                && name
+                    .to_str()
+                    .is_some_and(|n| is_run_output(n, case, in_vtu))
+            {
+                let path = entry.path();
+                std::fs::remove_file(&path).map_err(|e| Error::io(&path, e))?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Whether a file named `name` in a run's folder (or in its `vtu/` when `in_vtu`) is one a run
+/// of case `case` writes: `summary.json`, `history.csv`, `displacement.csv`, the case's PVD and
+/// PVTU files (`<case>.pvd`, `<case>_*.pvd`, `<case>_*.pvtu`), its VTU pieces
+/// (`vtu/<case>_*.vtu`), or the temporary file of one of these (`.<name>.<pid>.tmp`, left by a
+/// killed run: `io::output::write_atomic`).
+fn is_run_output(name: &str, case: &str, in_vtu: bool) -> bool {
+    let name = temporary_target(name).unwrap_or(name);
+    let of_case = |ext: &str| {
+        name.strip_prefix(case).is_some_and(|rest| {
+            rest == format!(".{ext}")
+                || (rest.starts_with('_') && rest.ends_with(&format!(".{ext}")))
+        })
+    };
+    if in_vtu {
+        of_case("vtu")
+    } else {
+        matches!(name, "summary.json" | "history.csv" | "displacement.csv")
+            || of_case("pvd")
+            || of_case("pvtu")
+    }
+}
+
+/// The file a temporary file of `io::output::write_atomic` (`.<name>.<pid>.tmp`) was for.
+fn temporary_target(name: &str) -> Option<&str> {
+    let inner = name.strip_prefix('.')?.strip_suffix(".tmp")?;
+    let (target, pid) = inner.rsplit_once('.')?;
+    (!pid.is_empty() && pid.bytes().all(|b| b.is_ascii_digit())).then_some(target)
+}
+
+/// Collective: every rank returns `Ok` when `mine` is `Ok` on every rank, else the error of the
+/// lowest failing rank as [`Error::Output`] (its message sent to all).
+fn agree_on(world: &mpi::topology::SimpleCommunicator, mine: Result<()>) -> Result<()> {
+    let message = mine.err().map(|e| e.to_string());
+    match super::first_rank_text(world, message.as_deref()) {
+        Some(m) => Err(Error::Output(m)),
+        None => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{is_run_output, temporary_target};
+
+    #[test]
+    fn a_run_removes_only_its_case_outputs() {
+        let ours = [
+            "summary.json",
+            "history.csv",
+            "displacement.csv",
+            "blocks.pvd",
+            "blocks_0003.pvtu",
+            "blocks_contact_pass2.pvd",
+            ".blocks.pvd.4242.tmp",
+            ".summary.json.7.tmp",
+        ];
+        for name in ours {
+            assert!(is_run_output(name, "blocks", false), "{name}");
+        }
+        let theirs = [
+            "notes.txt",
+            "blocksworld.pvd",
+            "other.pvd",
+            "blocks.vtu",
+            "figure",
+            ".blocks.pvd.tmp",
+            ".blocks.pvd.12a.tmp",
+            "summary.json.bak",
+            "case.toml",
+        ];
+        for name in theirs {
+            assert!(!is_run_output(name, "blocks", false), "{name}");
+        }
+        assert!(is_run_output("blocks_0001_r1.vtu", "blocks", true));
+        assert!(is_run_output(".blocks_0001_r0.vtu.99.tmp", "blocks", true));
+        assert!(!is_run_output("other_0001_r0.vtu", "blocks", true));
+        assert!(!is_run_output("summary.json", "blocks", true));
+        assert_eq!(temporary_target(".a.b.12.tmp"), Some("a.b"));
+        assert_eq!(temporary_target("a.12.tmp"), None);
+    }
 }
