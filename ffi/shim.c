@@ -1,6 +1,7 @@
-/* Values and calls that PETSc and OpenMPI expose only as macros, and glibc's malloc_trim. No
- * logic lives here. */
+/* Values and calls that PETSc, OpenMPI and the C library expose only as macros, and glibc's
+ * malloc_trim. No logic lives here. */
 #include <malloc.h>
+#include <signal.h>
 #include <petscsys.h>
 #include <mpi.h>
 
@@ -14,3 +15,6 @@ PetscErrorCode petsc_ffi_free(void *p) { return PetscFree(p); }
 /* glibc's malloc_trim(0), for the allocator PETSc, MUMPS and Rust share: hands the free memory
  * of every arena back to the OS. */
 int petsc_ffi_malloc_trim(void) { return malloc_trim(0); }
+/* signal(SIGPIPE, SIG_DFL) (macros): a write to a closed pipe ends the process as it ends any
+ * program, whatever handler was there. */
+void petsc_ffi_default_sigpipe(void) { signal(SIGPIPE, SIG_DFL); }

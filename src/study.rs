@@ -172,7 +172,8 @@
 //! failed run belongs to a variant with `may_fail = true` (a baseline expected to break). A
 //! metric missing from a converged run's summary stops the study: it would be missing from
 //! every run. So does an error that need not reach every rank alike (an error PETSc raises
-//! inside a solve; I/O): the message names the variant and level, also when one rank of a
+//! inside a solve; I/O), and a file a run cannot write (`Error::Output`, which the next runs
+//! would meet too): the message names the variant and level, also when one rank of a
 //! 2-rank run meets it and aborts the job (`error::with_context`). A run's folder
 //! `runs/<variant>/<level>/` is emptied before it runs, so that nothing of an earlier study in
 //! the same `--out` passes for this run's.
@@ -804,7 +805,7 @@ impl Study {
             // (not when that variant is the curves' reference, which is not on the front).
             let warm_up = out.join("warm_up");
             if let (Some(Err(e)), _) = self.run_one(petsc, 0, 0, &warm_up)? {
-                if !e.is_collective() {
+                if ends_study(&e) {
                     return Err(self.run_error(0, 0, e));
                 }
             }
@@ -886,8 +887,9 @@ impl Study {
                         }
                     }
                     // Errors every rank meets alike are this run's failure; any other (an I/O
-                    // error on one rank) ends the study, as it ends a run.
-                    Some(Err(e)) if e.is_collective() => {
+                    // error on one rank) and a file the run could not write end the study, as
+                    // they end a run.
+                    Some(Err(e)) if !ends_study(&e) => {
                         if rank == 0 {
                             record.newton_its = Summary::read(&run_dir.join("summary.json"))
                                 .map(|s| s.steps.iter().map(|st| st.newton_its).sum())
@@ -1215,7 +1217,7 @@ impl Study {
                     s.converged
                         && s.steps.iter().map(|st| st.newton_its).sum::<usize>() == newton_its
                 }
-                Some(Err(e)) if !e.is_collective() => return Err(self.run_error(v, level, e)),
+                Some(Err(e)) if ends_study(&e) => return Err(self.run_error(v, level, e)),
                 _ => false,
             };
             let mut figures = [seconds, f64::from(u8::from(same_path))];
@@ -1707,6 +1709,15 @@ fn errors_against_finest(
         };
     }
     (values, truth)
+}
+
+/// Whether a run's error ends the study rather than failing the run: an error that need not
+/// reach every rank alike, and a file the run could not write ([`Error::Output`]: a full disk,
+/// a folder without write permission, which the next runs would meet too). It is returned as
+/// a rank's own error ([`Study::run_error`]), so on several ranks the job is aborted with it,
+/// whatever the other ranks are doing.
+fn ends_study(e: &Error) -> bool {
+    !e.is_collective() || matches!(e, Error::Output(_))
 }
 
 /// Gives every rank rank 0's figures of a run (rank 0 runs every variant; the others may have

@@ -197,8 +197,10 @@ fn a_rerun_replaces_the_earlier_outputs() {
 }
 
 /// A reader that stops early (`mortar run ... | head -1`) ends the run as it ends any program,
-/// without PETSc's crash report ("Caught signal number 13 Broken Pipe ... Try option
-/// -start_in_debugger", which it used to print) and without a panic.
+/// by SIGPIPE at its next progress line, without PETSc's crash report ("Caught signal number
+/// 13 Broken Pipe ... Try option -start_in_debugger", which it used to print) and without a
+/// panic; the steps before it are on disk, `summary.json` included (a step's line comes after
+/// its files).
 #[test]
 fn a_closed_stdout_ends_the_run_quietly() {
     use std::io::BufRead;
@@ -224,6 +226,8 @@ fn a_closed_stdout_ends_the_run_quietly() {
         !stderr.contains("Caught signal") && !stderr.contains("panicked"),
         "{stderr}"
     );
+    use std::os::unix::process::ExitStatusExt;
+    assert_eq!(out.status.signal(), Some(13), "{:?}", out.status);
 }
 
 /// With no cuts allowed the same scene fails: one clear line, exit 1, and a summary that says

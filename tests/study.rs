@@ -535,6 +535,27 @@ fn curves_compare_variants_at_the_last_level() {
     assert!(s["metrics"].get("on_front_soft_1").is_none());
 }
 
+/// A run that cannot write its files ends the study, even for a variant that may fail: the
+/// next runs would meet the same full disk or missing permission. One line names the variant,
+/// the level and the file (the run's folder `runs/<variant>` is a file here). With the output
+/// errors agreed on by the ranks this was taken for the run's own failure, and the study went
+/// on and exited 0.
+#[test]
+fn a_run_that_cannot_write_its_files_ends_the_study() {
+    let dir = study_dir(
+        "study_unwritable_run",
+        &small_study("[[variant]]\nname = \"stuck\"\nmay_fail = true\n"),
+    );
+    std::fs::create_dir_all(dir.join("out/runs")).unwrap();
+    std::fs::write(dir.join("out/runs/stuck"), "a file").unwrap();
+    let o = run_study(&dir, &["-q"]);
+    let line = one_error_line(&o);
+    assert!(
+        line.contains("variant 'stuck' at level 0") && line.contains("runs/stuck"),
+        "{line}"
+    );
+}
+
 /// A variant with `may_fail = true` (a baseline expected to break) fails without failing the
 /// study: exit 0, the run recorded as failed, its curve plotted up to where it stopped.
 #[test]

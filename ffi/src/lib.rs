@@ -34,4 +34,6 @@ extern "C" {
     /// glibc's `malloc_trim(0)`: returns the free memory of every malloc arena to the OS; 1 if
     /// any was returned.
     pub fn petsc_ffi_malloc_trim() -> std::os::raw::c_int;
+    /// `signal(SIGPIPE, SIG_DFL)`: a write to a closed pipe ends the process.
+    pub fn petsc_ffi_default_sigpipe();
 }

@@ -92,10 +92,12 @@ impl Petsc {
             Some(super::error::capture_error),
             std::ptr::null_mut()
         ))?;
-        // PETSc's signal handler reports a closed pipe (`mortar run ... | head`), a hang-up or
-        // a quit as a crash ("Caught signal number 13 Broken Pipe ... Try option
-        // -start_in_debugger"); without it these signals end the run as they end any program.
-        chk!(PetscPopSignalHandler())?;
+        // PETSc's signal handler reports a closed pipe (`mortar run ... | head`) as a crash
+        // ("Caught signal number 13 Broken Pipe ... Try option -start_in_debugger"), and Rust
+        // ignores the signal (a write then fails): a closed pipe now ends the run as it ends
+        // any program. PETSc keeps its reports of the other signals (SEGV, FPE under
+        // `-fp_trap`, ...).
+        unsafe { p::petsc_ffi_default_sigpipe() };
         check_library_sizes()?;
         Ok(Petsc {
             _args: c_args,

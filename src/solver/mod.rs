@@ -116,7 +116,8 @@ impl EvalState {
 pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
     let world = petsc.world();
     let (rank, ranks) = (petsc.rank(), petsc.size());
-    // Progress goes to stdout; a closed stdout (a reader that stopped) does not stop the run.
+    // Progress goes to stdout. A closed stdout ends the run with SIGPIPE (`petsc::init`); should
+    // the signal be ignored after all, a failed write is no reason to stop it either.
     let say = |msg: String| {
         if rank == 0 && !opts.quiet {
             use std::io::Write;
@@ -527,6 +528,17 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
             });
             drop(output_guard);
             phases.add("output", t_out.elapsed().as_secs_f64());
+            if rank == 0 {
+                summary.timings = phases
+                    .seconds()
+                    .iter()
+                    .map(|(k, v)| (k.to_string(), *v))
+                    .collect();
+                results.write_summary(&summary);
+            }
+            results.agree(&world)?;
+            // Reported once the step's files are written: a run stopped by its reader (a
+            // closed stdout) has the step on disk.
             let load = Load(t);
             if accepted_unconverged {
                 unconverged += 1;
@@ -543,15 +555,6 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                 retries_note(cuts_in_row, fallbacks - fallbacks_before, fallback_line_search),
                 solve_seconds
             ));
-            if rank == 0 {
-                summary.timings = phases
-                    .seconds()
-                    .iter()
-                    .map(|(k, v)| (k.to_string(), *v))
-                    .collect();
-                results.write_summary(&summary);
-            }
-            results.agree(&world)?;
             cuts_in_row = 0;
             fallbacks_before = fallbacks;
             dt = (2.0 * dt).min(dt_nominal);
