@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use mpi::collective::{CommunicatorCollectives, Root, SystemOperation};
+use mpi::collective::{CommunicatorCollectives, Root};
 use mpi::topology::{Communicator, SimpleCommunicator};
 
 use mortar::case::Scene;
@@ -296,7 +296,7 @@ fn start<T>(
     let world = universe.world();
     let (rank, size) = (world.rank(), world.size());
     let loaded = check_petsc_args(&petsc_options).and_then(|()| load());
-    let first_failure = first_failing_rank(&world, loaded.is_err());
+    let first_failure = mortar::solver::lowest_rank_with(&world, loaded.is_err());
     let input = match loaded {
         Ok(s) if first_failure == size => s,
         Err(e) if rank == first_failure => {
@@ -383,14 +383,6 @@ fn check_expectations(
         Some(msg) => Err(Error::Expectation(msg)),
         None => Ok(()),
     }
-}
-
-/// The lowest rank for which `failed` holds, or the number of ranks if none.
-fn first_failing_rank(world: &SimpleCommunicator, failed: bool) -> i32 {
-    let mine = if failed { world.rank() } else { world.size() };
-    let mut first = 0;
-    world.all_reduce_into(&mine, &mut first, SystemOperation::min());
-    first
 }
 
 /// A collective error is printed by rank 0 (others stay quiet); any other error is printed with

@@ -35,13 +35,19 @@ fn compressed_block_one_and_two_ranks_agree() {
     assert!(d < 1e-10, "1 vs 2 ranks: max relative difference {d:e}");
 }
 
-/// The `mortar: error:` lines in a run's stderr (mpirun adds its own banners around them).
-fn error_lines(out: &std::process::Output) -> Vec<String> {
-    String::from_utf8_lossy(&out.stderr)
+/// The one `mortar: error:` line of a failed run's stderr (mpirun adds its own banners around
+/// it); `what` names the run in the messages. Fails unless the run failed without timing out
+/// (mpirun's `--timeout` gives exit code 110) and printed exactly one such line.
+fn the_error_line(out: &std::process::Output, what: &str) -> String {
+    assert_ne!(out.status.code(), Some(0), "{what}");
+    assert_ne!(out.status.code(), Some(110), "{what}: timed out");
+    let lines: Vec<String> = String::from_utf8_lossy(&out.stderr)
         .lines()
         .filter(|l| l.starts_with("mortar: error:"))
         .map(String::from)
-        .collect()
+        .collect();
+    assert_eq!(lines.len(), 1, "{what}: {lines:?}");
+    lines[0].clone()
 }
 
 /// Bad input, bad PETSc options (also those read only at the first factorization) and a failed
@@ -85,11 +91,8 @@ fn collective_failures_on_two_ranks_report_once() {
         let case = common::write_case(name, &toml);
         let out_dir = case.parent().unwrap().join("out");
         let out = common::run_raw(&case, 2, &out_dir, args);
-        assert_ne!(out.status.code(), Some(0), "{name}");
-        assert_ne!(out.status.code(), Some(110), "{name}: timed out");
-        let lines = error_lines(&out);
-        assert_eq!(lines.len(), 1, "{name}: {lines:?}");
-        assert!(lines[0].contains(culprit), "{name}: {}", lines[0]);
+        let line = the_error_line(&out, name);
+        assert!(line.contains(culprit), "{name}: {line}");
     }
 }
 
@@ -132,18 +135,13 @@ fn a_rank_local_write_failure_is_reported_once() {
     std::fs::create_dir_all(out_dir.join("vtu/thick_sphere_0001_r1.vtu/blocker")).unwrap();
     let t = std::time::Instant::now();
     let out = common::run_raw(&case, 2, &out_dir, &["-q"]);
-    assert_ne!(out.status.code(), Some(0));
-    assert_ne!(out.status.code(), Some(110), "timed out");
+    let line = the_error_line(&out, "a rank-local write");
     // Well inside mpirun's `--timeout` of 300 s, with room for a loaded CI host.
     let secs = t.elapsed().as_secs();
     assert!(secs < 150, "took {secs} s");
-    let lines = error_lines(&out);
-    assert_eq!(lines.len(), 1, "{lines:?}");
     assert!(
-        lines[0].starts_with("mortar: error: output: ")
-            && lines[0].contains("thick_sphere_0001_r1.vtu"),
-        "{}",
-        lines[0]
+        line.starts_with("mortar: error: output: ") && line.contains("thick_sphere_0001_r1.vtu"),
+        "{line}"
     );
 }
 
@@ -155,14 +153,10 @@ fn an_output_folder_that_cannot_be_made_is_reported_once() {
     let out_file = case.parent().unwrap().join("results");
     std::fs::write(&out_file, "not a folder").unwrap();
     let out = common::run_raw(&case, 2, &out_file, &["-q"]);
-    assert_ne!(out.status.code(), Some(0));
-    assert_ne!(out.status.code(), Some(110), "timed out");
-    let lines = error_lines(&out);
-    assert_eq!(lines.len(), 1, "{lines:?}");
+    let line = the_error_line(&out, "--out a file");
     assert!(
-        lines[0].starts_with("mortar: error: output: ") && lines[0].contains("results/vtu"),
-        "{}",
-        lines[0]
+        line.starts_with("mortar: error: output: ") && line.contains("results/vtu"),
+        "{line}"
     );
 }
 
@@ -177,10 +171,7 @@ fn an_unwritable_log_aborts_at_the_end_instead_of_hanging() {
     std::fs::write(&blocker, "a file").unwrap();
     let log = format!(":{}", blocker.join("log.txt").display());
     let out = common::run_raw(&case, 2, &out_dir, &["-q", "-log_view", &log]);
-    assert_ne!(out.status.code(), Some(0));
-    assert_ne!(out.status.code(), Some(110), "timed out");
-    let lines = error_lines(&out);
-    assert_eq!(lines.len(), 1, "{lines:?}");
-    assert!(lines[0].contains("-log_view"), "{}", lines[0]);
+    let line = the_error_line(&out, "an unwritable log");
+    assert!(line.contains("-log_view"), "{line}");
     assert!(out_dir.join("summary.json").is_file());
 }

@@ -192,7 +192,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
     }
     let mut tangent_ready = false;
     let mut newton_tangent = NewtonTangent::Other;
-    let mut results = Results::new(scene, &opts.out_dir, rank, ranks, &world)?;
+    let mut results = Results::new(scene, &opts.out_dir, &world)?;
     drop(setup_guard);
     phases.add("setup", t_setup.elapsed().as_secs_f64());
     say(format!(
@@ -900,6 +900,15 @@ fn collective_domain_check(
     }
 }
 
+/// Collective: the lowest rank for which `flag` holds, or the number of ranks if none.
+pub fn lowest_rank_with(world: &mpi::topology::SimpleCommunicator, flag: bool) -> i32 {
+    use mpi::traits::Communicator;
+    let mine = if flag { world.rank() } else { world.size() };
+    let mut lowest = 0;
+    world.all_reduce_into(&mine, &mut lowest, SystemOperation::min());
+    lowest
+}
+
 /// Collective: the `text` of the lowest rank that has one, on every rank (`None` when no rank
 /// has one).
 pub(crate) fn first_rank_text(
@@ -907,11 +916,8 @@ pub(crate) fn first_rank_text(
     text: Option<&str>,
 ) -> Option<String> {
     use mpi::traits::{Communicator, Root};
-    let size = world.size();
-    let me = if text.is_some() { world.rank() } else { size };
-    let mut first = size;
-    world.all_reduce_into(&me, &mut first, SystemOperation::min());
-    if first == size {
+    let first = lowest_rank_with(world, text.is_some());
+    if first == world.size() {
         return None;
     }
     let mut bytes = match text {

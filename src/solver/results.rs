@@ -86,10 +86,10 @@ impl Results {
     pub fn new(
         scene: &Scene,
         dir: &Path,
-        rank: usize,
-        ranks: usize,
         world: &mpi::topology::SimpleCommunicator,
     ) -> Result<Results> {
+        use mpi::traits::Communicator;
+        let (rank, ranks) = (world.rank() as usize, world.size() as usize);
         let prepared = if rank == 0 {
             prepare_folder(dir, &scene.name)
         } else {
