@@ -18,3 +18,9 @@ int petsc_ffi_malloc_trim(void) { return malloc_trim(0); }
 /* signal(SIGPIPE, SIG_DFL) (macros): a write to a closed pipe ends the process as it ends any
  * program, whatever handler was there. */
 void petsc_ffi_default_sigpipe(void) { signal(SIGPIPE, SIG_DFL); }
+/* Whether `sig`'s disposition is SIG_IGN (a macro): a background job of a script starts with
+ * SIGINT ignored, and should keep it so. */
+int petsc_ffi_signal_ignored(int sig) {
+    struct sigaction action;
+    return sigaction(sig, NULL, &action) == 0 && action.sa_handler == SIG_IGN;
+}

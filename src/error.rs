@@ -46,6 +46,10 @@ pub enum Error {
     /// A physical failure inside a solve (inverted element, NaN, diverged Newton).
     #[error("solve: {0}")]
     Solve(String),
+    /// A run or study stopped by SIGINT or SIGTERM, agreed on by every rank
+    /// ([`crate::interrupt`]): the signal and what was finished.
+    #[error("{0}")]
+    Interrupted(String),
     /// Declared expectations (`expect`) that the measured metrics do not meet.
     #[error("expect: {0}")]
     Expectation(String),
@@ -70,6 +74,7 @@ impl Error {
                 | Error::Options { .. }
                 | Error::Output(_)
                 | Error::Solve(_)
+                | Error::Interrupted(_)
                 | Error::Expectation(_)
         )
     }

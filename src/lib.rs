@@ -11,6 +11,7 @@
 //! - [`solver`]: load stepping, Newton through SNES, step cutting.
 //! - [`io`]: case files, Gmsh import, VTU/PVD output, CSV history, summary.
 //! - [`case`]: the validated scene a run is made of.
+//! - [`interrupt`]: a graceful stop on SIGINT and SIGTERM.
 
 pub mod case;
 pub mod contact;
@@ -18,6 +19,7 @@ pub mod dofs;
 pub mod error;
 pub mod expect;
 pub mod fe;
+pub mod interrupt;
 pub mod io;
 pub mod material;
 pub mod mesh;

@@ -10,7 +10,8 @@
 //! Options with two dashes are ours; everything after the case file that is not ours goes to
 //! PETSc's options database unchanged (`-snes_monitor`, `-ksp_type gmres`, `-log_view`, ...).
 //! Run under `mpirun -n N` for N ranks; without mpirun it is one rank. Any error ends with one
-//! line on stderr (from rank 0, or from the rank that failed) and exit code 1.
+//! line on stderr (from rank 0, or from the rank that failed) and exit code 1; a run or study
+//! stopped by SIGINT or SIGTERM ([`mortar::interrupt`]) with 128 + the signal.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -115,11 +116,21 @@ fn main() -> ExitCode {
     };
     match execute(cli, program) {
         Ok(()) => ExitCode::SUCCESS,
-        Err(Error::Reported) => ExitCode::FAILURE,
         Err(e) => {
-            print_error(e);
-            ExitCode::FAILURE
+            if !matches!(e, Error::Reported) {
+                print_error(e);
+            }
+            failure_status()
         }
+    }
+}
+
+/// 128 + the signal for a run or study stopped by one (as a shell reports a process the signal
+/// ended: 130 for SIGINT, 143 for SIGTERM), else 1.
+fn failure_status() -> ExitCode {
+    match mortar::interrupt::stopped_by().and_then(|s| u8::try_from(128 + s).ok()) {
+        Some(status) => ExitCode::from(status),
+        None => ExitCode::FAILURE,
     }
 }
 
@@ -307,7 +318,17 @@ fn start<T>(
     let mut petsc_args = vec![program];
     petsc_args.extend(petsc_options);
     match Petsc::start(universe, &petsc_args, options_file(&input)) {
-        Ok(p) => Ok((input, p, world)),
+        Ok(p) => {
+            // After PETSc's start, which installs signal handlers of its own.
+            if let Err(e) = mortar::interrupt::watch() {
+                if rank == 0 {
+                    print_warning(format_args!(
+                        "no graceful stop on SIGINT and SIGTERM (their handlers: {e})"
+                    ));
+                }
+            }
+            Ok((input, p, world))
+        }
         Err(e) => Err(abort_unless_collective(&world, e, rank, size)),
     }
 }

@@ -115,6 +115,8 @@
 //!
 //! - `runs/<variant>/<level>/`: each run's own outputs (`level` = index of the refinement),
 //!   emptied before the run, so that nothing an earlier study left there passes for its own.
+//!   A study stopped by SIGINT or SIGTERM ([`crate::interrupt`]) ends after the run it was in
+//!   (which stops at its next Newton iteration), with the runs finished before it in `study.csv`.
 //! - `study.csv`: one row per run, rewritten after every run: `variant, level, h, ranks,
 //!   error` (the metric, or the largest of the metrics; with `finest_reference` the relative
 //!   difference to the finest run's, rewritten once every run is done; empty for a failed
@@ -911,6 +913,22 @@ impl Study {
                         record.seconds = record.seconds.min(t);
                         record.seconds_slowest = record.seconds_slowest.max(t);
                     }
+                }
+                // Collective over the whole job: ranks that waited out a run on fewer ranks
+                // stop with the others.
+                if let Some(signal) = crate::interrupt::agreed(&petsc.world()) {
+                    let finished = match runs.len() {
+                        0 => "no run finished before it".to_string(),
+                        n => format!(
+                            "the {n} run(s) finished before it are in {}",
+                            out.join("study.csv").display()
+                        ),
+                    };
+                    return Err(Error::Interrupted(format!(
+                        "interrupted by {} in {}: {finished}",
+                        crate::interrupt::name(signal),
+                        self.run_label(v, level),
+                    )));
                 }
                 say(progress_line(&self.metric, &record));
                 runs.push(record);

@@ -50,6 +50,33 @@ fn the_error_line(out: &std::process::Output, what: &str) -> String {
     lines[0].clone()
 }
 
+/// SIGTERM to one rank of two stops both at the same point (they poll the signal together):
+/// exit status 143, one line, and rank 0's summary and history with the steps finished.
+#[test]
+fn a_signal_to_one_rank_stops_both() {
+    let case = common::write_case("interrupted_two_ranks", &common::slide_case(200));
+    let out_dir = case.parent().unwrap().join("out");
+    let run = common::subcommand("run", &case, 2, &out_dir, &[]);
+    let out = common::run_and_signal(run, "  step 2 ", "TERM", 1);
+    let line = the_error_line(&out, "SIGTERM to rank 1");
+    assert_eq!(out.status.code(), Some(143), "{:?}", out.status);
+    let s = common::summary(&out_dir);
+    let steps = s["steps"].as_array().unwrap().len();
+    assert!((2..200).contains(&steps), "{steps} steps");
+    let said = format!("interrupted by SIGTERM after step {steps} (load ");
+    assert!(
+        line.starts_with(&format!("mortar: error: {said}")),
+        "{line}"
+    );
+    assert!(
+        s["message"].as_str().unwrap().starts_with(&said),
+        "{}",
+        s["message"]
+    );
+    let history = std::fs::read_to_string(out_dir.join("history.csv")).unwrap();
+    assert_eq!(history.lines().count(), steps + 1, "{history}");
+}
+
 /// Bad input, bad PETSc options (also those read only at the first factorization) and a failed
 /// solve on 2 ranks: one error line, exit non-zero, and no hang (mpirun's --timeout would give exit code 110).
 #[test]

@@ -230,6 +230,73 @@ fn a_closed_stdout_ends_the_run_quietly() {
     assert_eq!(out.status.signal(), Some(13), "{:?}", out.status);
 }
 
+/// Ctrl-C (SIGINT) stops a run at its next step or Newton iteration: exit status 130, one line
+/// naming the signal and the last finished step, a summary that says the same, and the
+/// finished steps, and only they, in the history.
+#[test]
+fn an_interrupted_run_stops_with_its_finished_steps_on_disk() {
+    let case = common::write_case("interrupted", &common::slide_case(200));
+    let out_dir = case.parent().unwrap().join("out");
+    let run = common::subcommand("run", &case, 1, &out_dir, &[]);
+    let out = common::run_and_signal(run, "  step 2 ", "INT", 0);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{:?}: {stderr}", out.status);
+    let s = common::summary(&out_dir);
+    let steps = s["steps"].as_array().unwrap().len();
+    assert!((2..200).contains(&steps), "{steps} steps");
+    let said = format!("interrupted by SIGINT after step {steps} (load ");
+    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 1, "{stderr}");
+    assert!(
+        lines[0].starts_with(&format!("mortar: error: {said}")),
+        "{}",
+        lines[0]
+    );
+    assert!(
+        s["message"].as_str().unwrap().starts_with(&said),
+        "{}",
+        s["message"]
+    );
+    assert_eq!(
+        (&s["completed"], &s["converged"]),
+        (&false.into(), &false.into())
+    );
+    let history = std::fs::read_to_string(out_dir.join("history.csv")).unwrap();
+    assert_eq!(history.lines().count(), steps + 1, "{history}");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let last = format!("mortar: interrupted -> {}", out_dir.display());
+    assert!(stdout.trim_end().ends_with(&last), "{stdout}");
+}
+
+/// A run started with SIGINT ignored (a background job of a script) keeps ignoring it: the
+/// signal changes nothing.
+#[test]
+fn a_run_started_with_sigint_ignored_keeps_ignoring_it() {
+    let case = common::write_case("ignored_sigint", &common::slide_case(20));
+    let out_dir = case.parent().unwrap().join("out");
+    let mut run = Command::new("sh");
+    run.args([
+        "-c",
+        "trap '' INT; exec \"$0\" \"$@\"",
+        env!("CARGO_BIN_EXE_mortar"),
+        "run",
+    ])
+    .arg(&case)
+    .arg("--out")
+    .arg(&out_dir);
+    common::mpi_env(&mut run);
+    let out = common::run_and_signal(run, "  step 2 ", "INT", 0);
+    assert!(
+        out.status.success(),
+        "{:?}: {}",
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let s = common::summary(&out_dir);
+    assert_eq!(s["converged"], true);
+    assert_eq!(s["steps"].as_array().unwrap().len(), 20);
+}
+
 /// With no cuts allowed the same scene fails: one clear line, exit 1, and a summary that says
 /// so (finished steps, none here, stay on disk).
 #[test]

@@ -1299,3 +1299,43 @@ fn a_variant_on_more_ranks_than_the_job_is_refused_cleanly() {
         "an output folder was left behind"
     );
 }
+
+/// Ctrl-C (SIGINT) during a study's second run: the study stops there with exit status 130 and
+/// one line naming the signal, the run and where the finished run is; `study.csv` holds that
+/// run alone.
+#[test]
+fn an_interrupted_study_keeps_the_runs_it_finished() {
+    let dir = common::fresh_dir("study_interrupted");
+    std::fs::write(dir.join("case.toml"), common::slide_case(200)).unwrap();
+    let mut study = String::from(
+        "case = \"case.toml\"\nmetric = \"max_newton_its\"\ntitle = \"t\"\n\
+         [[refinement]]\nh = 1.0\nset = {}\n",
+    );
+    for (name, mu) in [("a", 0.3), ("b", 0.2), ("c", 0.1)] {
+        study += &format!(
+            "[[variant]]\nname = \"{name}\"\nset = {{ \"interface.0.friction\" = {mu} }}\n"
+        );
+    }
+    std::fs::write(dir.join("study.toml"), study).unwrap();
+    let out_dir = dir.join("out");
+    let run = common::subcommand("study", &dir.join("study.toml"), 1, &out_dir, &[]);
+    let o = common::run_and_signal(run, "  a level 0 ", "INT", 0);
+    assert_eq!(
+        o.status.code(),
+        Some(130),
+        "{:?}: {}",
+        o.status,
+        text(&o.stderr)
+    );
+    let line = one_error_line(&o);
+    let said = format!(
+        "interrupted by SIGINT in study {}: variant 'b' at level 0: the 1 run(s) finished \
+         before it are in {}",
+        dir.join("study.toml").display(),
+        out_dir.join("study.csv").display()
+    );
+    assert_eq!(line, format!("mortar: error: {said}"));
+    let rows = csv_rows(&out_dir);
+    assert_eq!(rows.len(), 1, "{rows:?}");
+    assert_eq!(rows[0]["variant"], "a");
+}

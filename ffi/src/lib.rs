@@ -36,4 +36,6 @@ extern "C" {
     pub fn petsc_ffi_malloc_trim() -> std::os::raw::c_int;
     /// `signal(SIGPIPE, SIG_DFL)`: a write to a closed pipe ends the process.
     pub fn petsc_ffi_default_sigpipe();
+    /// 1 if the disposition of signal `sig` is `SIG_IGN`, else 0.
+    pub fn petsc_ffi_signal_ignored(sig: std::os::raw::c_int) -> std::os::raw::c_int;
 }

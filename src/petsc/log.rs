@@ -95,9 +95,12 @@ impl Phases {
         *self.seconds.entry(name).or_insert(0.0) += seconds;
     }
 
-    /// Seconds per phase so far.
-    pub fn seconds(&self) -> &BTreeMap<&'static str, f64> {
-        &self.seconds
+    /// Seconds per phase so far, by name (`summary.json`'s `timings`).
+    pub fn timings(&self) -> BTreeMap<String, f64> {
+        self.seconds
+            .iter()
+            .map(|(k, v)| (k.to_string(), *v))
+            .collect()
     }
 }
 

@@ -125,6 +125,13 @@ fn set_run_comm(raw: Option<petsc_ffi::MPI_Comm>) {
     RUN_COMM.with(|c| c.set(raw));
 }
 
+/// Whether `signal` is ignored (`SIG_IGN`) in this process: a background job of a script
+/// starts with SIGINT ignored. (A C library query, kept with the project's other foreign calls.)
+pub fn signal_is_ignored(signal: std::os::raw::c_int) -> bool {
+    // SAFETY: `sigaction` with a null new action only reads the current disposition.
+    unsafe { petsc_ffi::petsc_ffi_signal_ignored(signal) != 0 }
+}
+
 /// The self communicator.
 pub fn comm_self() -> petsc_ffi::MPI_Comm {
     // SAFETY: returns a constant handle; valid after MPI_Init.

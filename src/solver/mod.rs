@@ -21,7 +21,9 @@
 //! After each converged step: reactions on the constrained sets (summed over ranks), one VTU
 //! file per rank, the PVTU and PVD written by rank 0 once all pieces exist, and a history row.
 //! `summary.json` is rewritten after every step, so a killed run leaves a valid summary of what
-//! finished (with `"converged": false`).
+//! finished (with `"converged": false`). A run stopped by SIGINT or SIGTERM
+//! ([`crate::interrupt`]: polled, collectively, before every step and every Jacobian) ends
+//! there: its summary keeps the finished steps and says `interrupted by ...` in `message`.
 
 pub mod bulk;
 pub mod model;
@@ -39,6 +41,7 @@ use crate::contact::frictional::ContactInterfaces;
 use crate::contact::tying::{Augmented, TiedInterfaces};
 use crate::dofs::DofMap;
 use crate::error::{print_error, print_warning, Error, Result};
+use crate::interrupt;
 use crate::io::output::{StepRecord, Summary};
 use crate::petsc::log::Phases;
 use crate::petsc::snes::Tolerances;
@@ -207,13 +210,13 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
     // Everything from here may fail on one rank only (I/O, say) while the others wait in a
     // collective call; such an error aborts the job *here*, while the PETSc objects are alive:
     // destroying them (MUMPS in particular) is itself collective and would hang.
-    let stepping = (|| -> Result<Summary> {
-        let mut summary = Summary {
-            case: scene.name.clone(),
-            ranks,
-            converged: false,
-            ..Default::default()
-        };
+    let mut summary = Summary {
+        case: scene.name.clone(),
+        ranks,
+        converged: false,
+        ..Default::default()
+    };
+    let stepping = (|| -> Result<()> {
         let dt_nominal = 1.0 / scene.steps as f64;
         let dt_min = dt_nominal * 0.5f64.powi(scene.max_cuts as i32) * (1.0 - 1e-12);
         let (mut t, mut dt, mut cuts_in_row, mut step) = (0.0f64, dt_nominal, 0usize, 0usize);
@@ -229,6 +232,9 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         let mut fallbacks_before = 0usize;
         let mut unconverged = 0usize;
         while t < 1.0 - 1e-12 {
+            if let Some(signal) = interrupt::agreed(&world) {
+                return Err(Error::Interrupted(interrupt::name(signal)));
+            }
             let t_new = if t + dt > 1.0 - 1e-9 { 1.0 } else { t + dt };
             if t_new <= t {
                 // (The case file's bound on steps.max_cuts keeps steps far above this.)
@@ -302,6 +308,11 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                     collective_domain_check(&world, inv)
                 };
                 let mut jacobian = |xv: &Vector, j: &mut Matrix| -> Result<(), CallbackError> {
+                    // Once per Newton iteration, before its costly part.
+                    if let Some(signal) = interrupt::agreed(&world) {
+                        let name = interrupt::name(signal);
+                        return Err(CallbackError::Fatal(Error::Interrupted(name)));
+                    }
                     let _stage = assembly_stage.map(|st| st.push()).transpose()?;
                     let mut s = state.borrow_mut();
                     let t0 = Instant::now();
@@ -529,11 +540,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
             drop(output_guard);
             phases.add("output", t_out.elapsed().as_secs_f64());
             if rank == 0 {
-                summary.timings = phases
-                    .seconds()
-                    .iter()
-                    .map(|(k, v)| (k.to_string(), *v))
-                    .collect();
+                summary.timings = phases.timings();
                 results.write_summary(&summary);
             }
             results.agree(&world)?;
@@ -626,11 +633,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         summary
             .metrics
             .insert("free_dofs".into(), dofs.total_free as f64);
-        summary.timings = phases
-            .seconds()
-            .iter()
-            .map(|(k, v)| (k.to_string(), *v))
-            .collect();
+        summary.timings = phases.timings();
         if rank == 0 {
             results.write_summary(&summary);
         }
@@ -648,15 +651,47 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         ));
         match &summary.message {
             Some(m) if !summary.completed => Err(Error::Solve(m.clone())),
-            _ => Ok(summary),
+            _ => Ok(()),
         }
     })();
+    let stepping = match stepping {
+        // (Every rank has it: the ranks agreed on the signal.)
+        Err(Error::Interrupted(signal)) => {
+            let message = interruption(&signal, &summary, &opts.out_dir);
+            summary.message = Some(message.clone());
+            summary.timings = phases.timings();
+            if rank == 0 {
+                results.write_summary(&summary);
+            }
+            results.agree(&world).and_then(|()| {
+                say(format!("mortar: interrupted -> {}", opts.out_dir.display()));
+                Err(Error::Interrupted(message))
+            })
+        }
+        other => other,
+    };
     match stepping {
         Err(e) if ranks > 1 && !e.is_collective() => {
             print_error(crate::error::abort_line(rank as i32, &e));
             world.abort(1)
         }
-        other => other,
+        other => other.map(|()| summary),
+    }
+}
+
+/// What a run stopped by `signal` (its name) leaves: `interrupted by SIGINT after step 20 (load
+/// 0.4): ...`.
+fn interruption(signal: &str, summary: &Summary, out_dir: &std::path::Path) -> String {
+    match summary.steps.last() {
+        Some(last) => format!(
+            "interrupted by {signal} after step {} (load {:.6}): the outputs in {} hold the {} \
+             step(s) finished",
+            last.step,
+            Load(last.load),
+            out_dir.display(),
+            summary.steps.len()
+        ),
+        None => format!("interrupted by {signal} before the first step finished"),
     }
 }
 

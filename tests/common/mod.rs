@@ -73,7 +73,7 @@ pub fn mortar_command() -> Command {
 }
 
 /// The MPI environment every run needs here (see shared/design/STACK.md).
-fn mpi_env(cmd: &mut Command) -> &mut Command {
+pub fn mpi_env(cmd: &mut Command) -> &mut Command {
     cmd.env("OMPI_ALLOW_RUN_AS_ROOT", "1")
         .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
         .env("OMPI_MCA_mpi_yield_when_idle", "1")
@@ -108,6 +108,19 @@ pub fn run_subcommand(
     out_dir: &Path,
     args: &[&str],
 ) -> Output {
+    self::subcommand(subcommand, file, ranks, out_dir, args)
+        .output()
+        .expect("cannot start mortar (or mpirun)")
+}
+
+/// The command of [`run_subcommand`], not started.
+pub fn subcommand(
+    subcommand: &str,
+    file: &Path,
+    ranks: usize,
+    out_dir: &Path,
+    args: &[&str],
+) -> Command {
     let exe = env!("CARGO_BIN_EXE_mortar");
     let mut cmd = if ranks == 1 {
         Command::new(exe)
@@ -128,9 +141,62 @@ pub fn run_subcommand(
         .arg(file)
         .arg("--out")
         .arg(out_dir)
-        .args(args)
-        .output()
-        .expect("cannot start mortar (or mpirun)")
+        .args(args);
+    cmd
+}
+
+/// Starts `command` (a run or study, its progress on stdout), waits for a progress line that
+/// starts with `after` (`"  step 2 "`), sends `signal` (a name `kill` knows: `INT`, `TERM`) to the process of rank
+/// `rank` (the command's own process when it is not mpirun), and returns the output.
+pub fn run_and_signal(mut command: Command, after: &str, signal: &str, rank: usize) -> Output {
+    use std::io::{BufRead, Read};
+    let mut child = command
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("cannot start mortar (or mpirun)");
+    let mut stdout = std::io::BufReader::new(child.stdout.take().unwrap());
+    let mut seen = String::new();
+    loop {
+        let mut line = String::new();
+        let n = stdout.read_line(&mut line).unwrap();
+        seen.push_str(&line);
+        assert!(n > 0, "the run ended before a line {after:?}:\n{seen}");
+        if line.starts_with(after) {
+            break;
+        }
+    }
+    let is_mpirun = command.get_program() == "mpirun";
+    let pid = if is_mpirun {
+        rank_process(child.id(), rank)
+    } else {
+        child.id()
+    };
+    let killed = Command::new("kill")
+        .args([format!("-{signal}"), pid.to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success(), "kill -{signal} {pid}");
+    stdout.read_to_string(&mut seen).unwrap();
+    let mut out = child.wait_with_output().unwrap();
+    out.stdout = seen.into_bytes();
+    out
+}
+
+/// The process of rank `rank` among the children of mpirun's process `mpirun`.
+fn rank_process(mpirun: u32, rank: usize) -> u32 {
+    let wanted = format!("OMPI_COMM_WORLD_RANK={rank}");
+    let tasks = std::fs::read_dir(format!("/proc/{mpirun}/task")).unwrap();
+    for task in tasks {
+        let children = std::fs::read_to_string(task.unwrap().path().join("children"));
+        for pid in children.unwrap_or_default().split_whitespace() {
+            let environ = std::fs::read(format!("/proc/{pid}/environ")).unwrap_or_default();
+            if environ.split(|&b| b == 0).any(|v| v == wanted.as_bytes()) {
+                return pid.parse().unwrap();
+            }
+        }
+    }
+    panic!("no process of rank {rank} under mpirun {mpirun}")
 }
 
 /// summary.json as JSON.
