@@ -15,9 +15,9 @@ PetscErrorCode petsc_ffi_free(void *p) { return PetscFree(p); }
 /* glibc's malloc_trim(0), for the allocator PETSc, MUMPS and Rust share: hands the free memory
  * of every arena back to the OS. */
 int petsc_ffi_malloc_trim(void) { return malloc_trim(0); }
-/* signal(SIGPIPE, SIG_DFL) (macros): a write to a closed pipe ends the process as it ends any
- * program, whatever handler was there. */
-void petsc_ffi_default_sigpipe(void) { signal(SIGPIPE, SIG_DFL); }
+/* signal(sig, SIG_DFL) (SIG_DFL is a macro): the signal's default action again, whatever
+ * handler was there. */
+void petsc_ffi_default_signal(int sig) { signal(sig, SIG_DFL); }
 /* Whether `sig`'s disposition is SIG_IGN (a macro): a background job of a script starts with
  * SIGINT ignored, and should keep it so. */
 int petsc_ffi_signal_ignored(int sig) {

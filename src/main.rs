@@ -93,6 +93,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    mortar::interrupt::note_ignored_signals();
     let args: Vec<String> = std::env::args().collect();
     let program = args.first().cloned().unwrap_or_else(|| "mortar".into());
     let args = match pull_our_options(&args) {

@@ -115,8 +115,9 @@
 //!
 //! - `runs/<variant>/<level>/`: each run's own outputs (`level` = index of the refinement),
 //!   emptied before the run, so that nothing an earlier study left there passes for its own.
-//!   A study stopped by SIGINT or SIGTERM ([`crate::interrupt`]) ends after the run it was in
-//!   (which stops at its next Newton iteration), with the runs finished before it in `study.csv`.
+//!   A study stopped by SIGINT or SIGTERM ([`crate::interrupt`]) ends once the run it was in
+//!   stops (at its next Newton iteration; a run on fewer ranks than the job, or one of its
+//!   `repeat`s, may finish first), with the runs that finished in `study.csv`.
 //! - `study.csv`: one row per run, rewritten after every run: `variant, level, h, ranks,
 //!   error` (the metric, or the largest of the metrics; with `finest_reference` the relative
 //!   difference to the finest run's, rewritten once every run is done; empty for a failed
@@ -832,6 +833,7 @@ impl Study {
                 let ranks = variant.ranks.unwrap_or(job_size);
                 let t0 = Instant::now();
                 let (result, unused) = self.run_one(petsc, v, level, &run_dir)?;
+                let run_interrupted = matches!(result, Some(Err(Error::Interrupted(_))));
                 unread = Some(match unread {
                     None => unused,
                     Some(before) => before.intersection(&unused).cloned().collect(),
@@ -915,27 +917,29 @@ impl Study {
                     }
                 }
                 // Collective over the whole job: ranks that waited out a run on fewer ranks
-                // stop with the others.
-                if let Some(signal) = crate::interrupt::agreed(&petsc.world()) {
+                // stop with the others. A run the signal stopped is left out; one that
+                // finished is recorded.
+                let stop = crate::interrupt::agreed(&petsc.world());
+                if stop.is_none() || !run_interrupted {
+                    say(progress_line(&self.metric, &record));
+                    runs.push(record);
+                    if rank == 0 {
+                        write_atomic(&out.join("study.csv"), study_csv(&runs).as_bytes())?;
+                        summary =
+                            self.summary(&runs, petsc.size(), started.elapsed().as_secs_f64());
+                        summary.write(&out.join("summary.json"))?;
+                    }
+                }
+                if let Some(signal) = stop {
                     let finished = match runs.len() {
-                        0 => "no run finished before it".to_string(),
-                        n => format!(
-                            "the {n} run(s) finished before it are in {}",
-                            out.join("study.csv").display()
-                        ),
+                        0 => "no run finished".to_string(),
+                        n => format!("{n} finished run(s) in {}", out.join("study.csv").display()),
                     };
                     return Err(Error::Interrupted(format!(
-                        "interrupted by {} in {}: {finished}",
+                        "interrupted by {} at {}: {finished}",
                         crate::interrupt::name(signal),
                         self.run_label(v, level),
                     )));
-                }
-                say(progress_line(&self.metric, &record));
-                runs.push(record);
-                if rank == 0 {
-                    write_atomic(&out.join("study.csv"), study_csv(&runs).as_bytes())?;
-                    summary = self.summary(&runs, petsc.size(), started.elapsed().as_secs_f64());
-                    summary.write(&out.join("summary.json"))?;
                 }
                 if !columns_checked {
                     columns_checked = self.check_columns(petsc, &run_dir)?;
@@ -1227,6 +1231,10 @@ impl Study {
         let scratch = run_dir.with_extension("repeat");
         let mut times = Vec::with_capacity(self.repeat - 1);
         for _ in 1..self.repeat {
+            // Collective over the whole job (every rank repeats the run).
+            if crate::interrupt::agreed(&petsc.world()).is_some() {
+                break;
+            }
             let t0 = Instant::now();
             let (result, _) = self.run_one(petsc, v, level, &scratch)?;
             let seconds = t0.elapsed().as_secs_f64();

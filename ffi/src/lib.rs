@@ -34,8 +34,8 @@ extern "C" {
     /// glibc's `malloc_trim(0)`: returns the free memory of every malloc arena to the OS; 1 if
     /// any was returned.
     pub fn petsc_ffi_malloc_trim() -> std::os::raw::c_int;
-    /// `signal(SIGPIPE, SIG_DFL)`: a write to a closed pipe ends the process.
-    pub fn petsc_ffi_default_sigpipe();
+    /// `signal(sig, SIG_DFL)`: the signal's default action again.
+    pub fn petsc_ffi_default_signal(sig: std::os::raw::c_int);
     /// 1 if the disposition of signal `sig` is `SIG_IGN`, else 0.
     pub fn petsc_ffi_signal_ignored(sig: std::os::raw::c_int) -> std::os::raw::c_int;
 }

@@ -97,7 +97,7 @@ impl Petsc {
         // ignores the signal (a write then fails): a closed pipe now ends the run as it ends
         // any program. PETSc keeps its reports of the other signals (SEGV, FPE under
         // `-fp_trap`, ...).
-        unsafe { p::petsc_ffi_default_sigpipe() };
+        super::default_signal(signal_hook::consts::SIGPIPE);
         check_library_sizes()?;
         Ok(Petsc {
             _args: c_args,

@@ -126,10 +126,17 @@ fn set_run_comm(raw: Option<petsc_ffi::MPI_Comm>) {
 }
 
 /// Whether `signal` is ignored (`SIG_IGN`) in this process: a background job of a script
-/// starts with SIGINT ignored. (A C library query, kept with the project's other foreign calls.)
+/// starts with SIGINT ignored. (C library calls live here with the project's other foreign
+/// calls.)
 pub fn signal_is_ignored(signal: std::os::raw::c_int) -> bool {
     // SAFETY: `sigaction` with a null new action only reads the current disposition.
     unsafe { petsc_ffi::petsc_ffi_signal_ignored(signal) != 0 }
+}
+
+/// Gives `signal` its default action again, dropping any handler (PETSc's).
+pub fn default_signal(signal: std::os::raw::c_int) {
+    // SAFETY: setting a signal's disposition to SIG_DFL has no memory-safety preconditions.
+    unsafe { petsc_ffi::petsc_ffi_default_signal(signal) }
 }
 
 /// The self communicator.

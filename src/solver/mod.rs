@@ -210,13 +210,13 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
     // Everything from here may fail on one rank only (I/O, say) while the others wait in a
     // collective call; such an error aborts the job *here*, while the PETSc objects are alive:
     // destroying them (MUMPS in particular) is itself collective and would hang.
-    let mut summary = Summary {
-        case: scene.name.clone(),
-        ranks,
-        converged: false,
-        ..Default::default()
-    };
-    let stepping = (|| -> Result<()> {
+    let stepping = (|| -> Result<Summary> {
+        let mut summary = Summary {
+            case: scene.name.clone(),
+            ranks,
+            converged: false,
+            ..Default::default()
+        };
         let dt_nominal = 1.0 / scene.steps as f64;
         let dt_min = dt_nominal * 0.5f64.powi(scene.max_cuts as i32) * (1.0 - 1e-12);
         let (mut t, mut dt, mut cuts_in_row, mut step) = (0.0f64, dt_nominal, 0usize, 0usize);
@@ -231,9 +231,12 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         // Fallbacks before the current step's first attempt (for its progress line).
         let mut fallbacks_before = 0usize;
         let mut unconverged = 0usize;
+        // The signal's name, once the ranks agreed to stop on one (`interrupt`).
+        let mut interrupted: Option<String> = None;
         while t < 1.0 - 1e-12 {
             if let Some(signal) = interrupt::agreed(&world) {
-                return Err(Error::Interrupted(interrupt::name(signal)));
+                interrupted = Some(interrupt::name(signal));
+                break;
             }
             let t_new = if t + dt > 1.0 - 1e-9 { 1.0 } else { t + dt };
             if t_new <= t {
@@ -308,10 +311,11 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                     collective_domain_check(&world, inv)
                 };
                 let mut jacobian = |xv: &Vector, j: &mut Matrix| -> Result<(), CallbackError> {
-                    // Once per Newton iteration, before its costly part.
+                    // Once per Newton iteration, before its costly part. As a domain error,
+                    // SNES ends the solve cleanly (not converged); the step loop stops on it.
                     if let Some(signal) = interrupt::agreed(&world) {
                         let name = interrupt::name(signal);
-                        return Err(CallbackError::Fatal(Error::Interrupted(name)));
+                        return Err(CallbackError::Domain(format!("interrupted by {name}")));
                     }
                     let _stage = assembly_stage.map(|st| st.push()).transpose()?;
                     let mut s = state.borrow_mut();
@@ -351,7 +355,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                         let first = solve_once(&mut snes, &mut x, &mut jac, &model);
                         snes.set_max_iterations(max_it)?;
                         let first = first?;
-                        if first.converged {
+                        if first.converged || interrupt::stopped_by().is_some() {
                             first
                         } else {
                             newton_total += first.iterations;
@@ -426,6 +430,15 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                 )));
             }
             let mut accepted_unconverged = false;
+            if !outcome.converged && interrupt::stopped_by().is_some() {
+                // Stopped by a signal: the run ends at the last finished step, as a failed
+                // one does.
+                x_prev.copy_to(&mut x)?;
+                model.tying.set_multipliers(&multipliers);
+                model.contact.restore(&contact_saved);
+                interrupted = interrupt::stopped_by().map(interrupt::name);
+                break;
+            }
             if !outcome.converged {
                 let why = outcome
                     .domain_error
@@ -568,6 +581,9 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         }
         summary.completed = t >= 1.0 - 1e-12;
         summary.converged = summary.completed && unconverged == 0;
+        if let Some(signal) = &interrupted {
+            summary.message = Some(interruption(signal, &summary, &opts.out_dir));
+        }
         // Results describe the last converged state (x was restored after a failed attempt).
         {
             let mut s = state.borrow_mut();
@@ -645,37 +661,23 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                 (true, n) => format!(
                     "completed with {n} unconverged step(s) accepted (steps.on_failure = \"continue\")"
                 ),
+                (false, _) if interrupted.is_some() => "interrupted".to_string(),
                 (false, _) => "FAILED".to_string(),
             },
             opts.out_dir.display()
         ));
         match &summary.message {
+            Some(m) if interrupted.is_some() => Err(Error::Interrupted(m.clone())),
             Some(m) if !summary.completed => Err(Error::Solve(m.clone())),
-            _ => Ok(()),
+            _ => Ok(summary),
         }
     })();
-    let stepping = match stepping {
-        // (Every rank has it: the ranks agreed on the signal.)
-        Err(Error::Interrupted(signal)) => {
-            let message = interruption(&signal, &summary, &opts.out_dir);
-            summary.message = Some(message.clone());
-            summary.timings = phases.timings();
-            if rank == 0 {
-                results.write_summary(&summary);
-            }
-            results.agree(&world).and_then(|()| {
-                say(format!("mortar: interrupted -> {}", opts.out_dir.display()));
-                Err(Error::Interrupted(message))
-            })
-        }
-        other => other,
-    };
     match stepping {
         Err(e) if ranks > 1 && !e.is_collective() => {
             print_error(crate::error::abort_line(rank as i32, &e));
             world.abort(1)
         }
-        other => other.map(|()| summary),
+        other => other,
     }
 }
 

@@ -172,6 +172,13 @@ pub fn run_and_signal(mut command: Command, after: &str, signal: &str, rank: usi
     } else {
         child.id()
     };
+    // Not a zombie: a run that ended before the signal would make the test prove nothing.
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
+    let state = stat.rsplit(')').next().unwrap_or("").trim_start();
+    assert!(
+        !state.is_empty() && !state.starts_with('Z'),
+        "the process ended before the signal:\n{seen}"
+    );
     let killed = Command::new("kill")
         .args([format!("-{signal}"), pid.to_string()])
         .status()
