@@ -170,6 +170,13 @@ fn a_rank_local_write_failure_is_reported_once() {
         line.starts_with("mortar: error: output: ") && line.contains("thick_sphere_0001_r1.vtu"),
         "{line}"
     );
+    // The summary (rank 0's, written) says the same.
+    let s = common::summary(&out_dir);
+    assert_eq!(
+        s["message"].as_str().map(|m| format!("mortar: error: {m}")),
+        Some(line),
+        "{s}"
+    );
 }
 
 /// An output folder that cannot be made (`--out` names a file) on 2 ranks: one line naming

@@ -476,6 +476,10 @@ fn an_under_constrained_body_is_reported() {
             .collect();
         assert_eq!(errors.len(), 1, "{ranks} ranks: {stderr}");
         assert!(errors[0].contains("singular"), "{}", errors[0]);
+        // The summary says the same (it used to keep `message: null`, as if still running).
+        let s = common::summary(&out_dir);
+        let message = s["message"].as_str().unwrap_or_default();
+        assert_eq!(format!("mortar: error: {message}"), errors[0], "{s}");
     }
 }
 

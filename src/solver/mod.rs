@@ -210,13 +210,13 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
     // Everything from here may fail on one rank only (I/O, say) while the others wait in a
     // collective call; such an error aborts the job *here*, while the PETSc objects are alive:
     // destroying them (MUMPS in particular) is itself collective and would hang.
-    let stepping = (|| -> Result<Summary> {
-        let mut summary = Summary {
-            case: scene.name.clone(),
-            ranks,
-            converged: false,
-            ..Default::default()
-        };
+    let mut summary = Summary {
+        case: scene.name.clone(),
+        ranks,
+        converged: false,
+        ..Default::default()
+    };
+    let stepping = (|| -> Result<()> {
         let dt_nominal = 1.0 / scene.steps as f64;
         let dt_min = dt_nominal * 0.5f64.powi(scene.max_cuts as i32) * (1.0 - 1e-12);
         let (mut t, mut dt, mut cuts_in_row, mut step) = (0.0f64, dt_nominal, 0usize, 0usize);
@@ -669,15 +669,28 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         match &summary.message {
             Some(m) if interrupted.is_some() => Err(Error::Interrupted(m.clone())),
             Some(m) if !summary.completed => Err(Error::Solve(m.clone())),
-            _ => Ok(summary),
+            _ => Ok(()),
         }
     })();
     match stepping {
+        Ok(()) => Ok(summary),
         Err(e) if ranks > 1 && !e.is_collective() => {
             print_error(crate::error::abort_line(rank as i32, &e));
             world.abort(1)
         }
-        other => other,
+        Err(e) => {
+            // An error that ended the run before its summary said so (a singular tangent, a
+            // failed write, an option PETSc reads at the first factorization): the summary
+            // says it, with the steps finished (best effort: the error may be a full disk).
+            if summary.message.is_none() {
+                summary.message = Some(e.to_string());
+                summary.timings = phases.timings();
+                if rank == 0 {
+                    results.write_summary(&summary);
+                }
+            }
+            Err(e)
+        }
     }
 }
 

@@ -37,7 +37,8 @@ pub struct Summary {
     /// Wall-clock seconds by phase.
     pub timings: BTreeMap<String, f64>,
     pub metrics: BTreeMap<String, f64>,
-    /// The failure reason, if any.
+    /// Why the run failed or stopped (a step that did not converge, an interruption, the error
+    /// that ended it), if it did.
     pub message: Option<String>,
 }
 
