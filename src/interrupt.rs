@@ -10,8 +10,9 @@
 //! `summary.json` saying why (`"message": "interrupted by SIGINT after step 20 ..."`), one line
 //! on stderr from rank 0, and exit status 128 + the signal (130, 143), as a shell reports a
 //! process the signal ended. A study ends once the run it was in stops, with the runs that
-//! finished in its `study.csv`. A signal during the set-up stops the run at its first step; one
-//! after the last step changes nothing (the run is complete).
+//! finished in its `study.csv`. A signal before the first step stops the run there (one while
+//! MPI and PETSc start, before [`watch`], ends the process); one after the last step changes
+//! nothing (the run is complete).
 //!
 //! A second signal ends the process at once (the signal's default action). A signal that was
 //! ignored when the program started (SIGINT in a background job of a script) stays ignored.

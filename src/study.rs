@@ -812,6 +812,10 @@ impl Study {
                     return Err(self.run_error(0, 0, e));
                 }
             }
+            if let Some(signal) = crate::interrupt::agreed(&petsc.world()) {
+                let label = format!("study {}: the warm-up run", self.file.display());
+                return Err(self.interrupted(signal, &label, &[], out));
+            }
         }
         let mut runs: Vec<RunRecord> = Vec::with_capacity(total);
         let mut summary = Summary::default();
@@ -920,7 +924,13 @@ impl Study {
                 // stop with the others. A run the signal stopped is left out; one that
                 // finished is recorded.
                 let stop = crate::interrupt::agreed(&petsc.world());
-                if stop.is_none() || !run_interrupted {
+                // Rank 0's verdict (the ranks a smaller run left out have none).
+                let mut run_interrupted = i32::from(run_interrupted);
+                petsc
+                    .world()
+                    .process_at_rank(0)
+                    .broadcast_into(&mut run_interrupted);
+                if stop.is_none() || run_interrupted == 0 {
                     say(progress_line(&self.metric, &record));
                     runs.push(record);
                     if rank == 0 {
@@ -931,15 +941,7 @@ impl Study {
                     }
                 }
                 if let Some(signal) = stop {
-                    let finished = match runs.len() {
-                        0 => "no run finished".to_string(),
-                        n => format!("{n} finished run(s) in {}", out.join("study.csv").display()),
-                    };
-                    return Err(Error::Interrupted(format!(
-                        "interrupted by {} at {}: {finished}",
-                        crate::interrupt::name(signal),
-                        self.run_label(v, level),
-                    )));
+                    return Err(self.interrupted(signal, &self.run_label(v, level), &runs, out));
                 }
                 if !columns_checked {
                     columns_checked = self.check_columns(petsc, &run_dir)?;
@@ -1259,6 +1261,18 @@ impl Study {
             std::fs::remove_dir_all(&scratch).map_err(|e| Error::io(&scratch, e))?;
         }
         Ok(times)
+    }
+
+    /// The study stopped by `signal` at `label` (its run), with `runs` finished.
+    fn interrupted(&self, signal: i32, label: &str, runs: &[RunRecord], out: &Path) -> Error {
+        let finished = match runs.len() {
+            0 => "no run finished".to_string(),
+            n => format!("{n} finished run(s) in {}", out.join("study.csv").display()),
+        };
+        Error::Interrupted(format!(
+            "interrupted by {} at {label}: {finished}",
+            crate::interrupt::name(signal)
+        ))
     }
 
     /// An error that ends the study (one that need not reach every rank alike: a PETSc

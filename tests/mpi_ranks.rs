@@ -50,11 +50,12 @@ fn the_error_line(out: &std::process::Output, what: &str) -> String {
     lines[0].clone()
 }
 
-/// SIGTERM to one rank of two stops both at the same point (they poll the signal together):
-/// exit status 143, one line, and rank 0's summary and history with the steps finished.
+/// SIGTERM to one rank of two stops both at the same point (they poll the signal together,
+/// here inside a Newton solve: the steps take several iterations): exit status 143, one line,
+/// and rank 0's summary and history with the steps finished.
 #[test]
 fn a_signal_to_one_rank_stops_both() {
-    let case = common::write_case("interrupted_two_ranks", &common::slide_case(2000));
+    let case = common::write_case("interrupted_two_ranks", &common::slide_case(100));
     let out_dir = case.parent().unwrap().join("out");
     let run = common::subcommand("run", &case, 2, &out_dir, &[]);
     let out = common::run_and_signal(run, "  step 2 ", "TERM", 1);
@@ -62,7 +63,7 @@ fn a_signal_to_one_rank_stops_both() {
     assert_eq!(out.status.code(), Some(143), "{:?}", out.status);
     let s = common::summary(&out_dir);
     let steps = s["steps"].as_array().unwrap().len();
-    assert!((2..2000).contains(&steps), "{steps} steps");
+    assert!((2..100).contains(&steps), "{steps} steps");
     let said = format!("interrupted by SIGTERM after step {steps} (load ");
     assert!(
         line.starts_with(&format!("mortar: error: {said}")),

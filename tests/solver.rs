@@ -232,10 +232,13 @@ fn a_closed_stdout_ends_the_run_quietly() {
 
 /// Ctrl-C (SIGINT) stops a run at its next step or Newton iteration: exit status 130, one line
 /// naming the signal and the last finished step, a summary that says the same, and the
-/// finished steps, and only they, in the history.
+/// finished steps, and only they, in the history. The steps of this scene take several Newton
+/// iterations, so the stop comes inside a solve (measured: in the Jacobian every time; the
+/// test failed with the state not restored to the last finished step).
 #[test]
 fn an_interrupted_run_stops_with_its_finished_steps_on_disk() {
-    let case = common::write_case("interrupted", &common::slide_case(2000));
+    let toml = common::slide_case(100) + "[output]\ntrack = [\"up.zmin\"]\n";
+    let case = common::write_case("interrupted", &toml);
     let out_dir = case.parent().unwrap().join("out");
     let run = common::subcommand("run", &case, 1, &out_dir, &[]);
     let out = common::run_and_signal(run, "  step 2 ", "INT", 0);
@@ -243,7 +246,7 @@ fn an_interrupted_run_stops_with_its_finished_steps_on_disk() {
     assert_eq!(out.status.code(), Some(130), "{:?}: {stderr}", out.status);
     let s = common::summary(&out_dir);
     let steps = s["steps"].as_array().unwrap().len();
-    assert!((2..2000).contains(&steps), "{steps} steps");
+    assert!((2..100).contains(&steps), "{steps} steps");
     let said = format!("interrupted by SIGINT after step {steps} (load ");
     let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
     assert_eq!(lines.len(), 1, "{stderr}");
@@ -263,12 +266,36 @@ fn an_interrupted_run_stops_with_its_finished_steps_on_disk() {
     );
     let history = std::fs::read_to_string(out_dir.join("history.csv")).unwrap();
     assert_eq!(history.lines().count(), steps + 1, "{history}");
-    // The end of a failed run: the last finished step's displacements and metrics.
+    // The end of a failed run: the last finished step's displacements (not the stopped
+    // iterate's): their mean over the secondary face equals the history's last row.
     assert!(
         s["metrics"]["max_displacement"].as_f64().unwrap() > 0.0,
         "{s}"
     );
-    assert!(!common::displacements(&out_dir).is_empty());
+    let face: Vec<[f64; 6]> = common::displacements(&out_dir)
+        .into_iter()
+        .filter(|r| {
+            (r[2] - 0.5).abs() < 1e-12 && [0.25, 0.6, 0.95].iter().any(|x| (r[0] - x).abs() < 1e-12)
+        })
+        .collect();
+    assert_eq!(face.len(), 9);
+    let header: Vec<&str> = history.lines().next().unwrap().split(',').collect();
+    let last_row: Vec<f64> = history
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    for (axis, name) in ["x", "y", "z"].iter().enumerate() {
+        let column = format!("track_up.zmin_{name}");
+        let tracked = last_row[header.iter().position(|h| *h == column).unwrap()];
+        let mean = face.iter().map(|r| r[3 + axis]).sum::<f64>() / 9.0;
+        assert!(
+            (mean - tracked).abs() <= 1e-12 * tracked.abs().max(1e-9),
+            "{column}: {mean} in displacement.csv, {tracked} in history.csv"
+        );
+    }
     let stdout = String::from_utf8_lossy(&out.stdout);
     let last = format!("mortar: interrupted -> {}", out_dir.display());
     assert!(stdout.trim_end().ends_with(&last), "{stdout}");

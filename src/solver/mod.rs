@@ -233,6 +233,9 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         let mut unconverged = 0usize;
         // The signal's name, once the ranks agreed to stop on one (`interrupt`).
         let mut interrupted: Option<String> = None;
+        // The signal a Jacobian evaluation agreed to stop on: the solve under way ends, and any
+        // later solve of the step returns at once.
+        let stop = std::cell::Cell::new(None);
         while t < 1.0 - 1e-12 {
             if let Some(signal) = interrupt::agreed(&world) {
                 interrupted = Some(interrupt::name(signal));
@@ -301,6 +304,9 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                               jac: &mut Matrix,
                               model: &Model|
              -> Result<crate::petsc::snes::SnesOutcome> {
+                if let Some(signal) = stop.get() {
+                    return Ok(not_started(signal));
+                }
                 let mut residual = |xv: &Vector, f: &mut Vector| -> Result<(), CallbackError> {
                     let _stage = assembly_stage.map(|st| st.push()).transpose()?;
                     let mut s = state.borrow_mut();
@@ -314,6 +320,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                     // Once per Newton iteration, before its costly part. As a domain error,
                     // SNES ends the solve cleanly (not converged); the step loop stops on it.
                     if let Some(signal) = interrupt::agreed(&world) {
+                        stop.set(Some(signal));
                         let name = interrupt::name(signal);
                         return Err(CallbackError::Domain(format!("interrupted by {name}")));
                     }
@@ -355,7 +362,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                         let first = solve_once(&mut snes, &mut x, &mut jac, &model);
                         snes.set_max_iterations(max_it)?;
                         let first = first?;
-                        if first.converged || interrupt::stopped_by().is_some() {
+                        if first.converged || stop.get().is_some() {
                             first
                         } else {
                             newton_total += first.iterations;
@@ -430,13 +437,13 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                 )));
             }
             let mut accepted_unconverged = false;
-            if !outcome.converged && interrupt::stopped_by().is_some() {
+            if let (false, Some(signal)) = (outcome.converged, stop.get()) {
                 // Stopped by a signal: the run ends at the last finished step, as a failed
                 // one does.
                 x_prev.copy_to(&mut x)?;
                 model.tying.set_multipliers(&multipliers);
                 model.contact.restore(&contact_saved);
-                interrupted = interrupt::stopped_by().map(interrupt::name);
+                interrupted = Some(interrupt::name(signal));
                 break;
             }
             if !outcome.converged {
@@ -683,6 +690,8 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
             // failed write, an option PETSc reads at the first factorization): the summary
             // says it, with the steps finished (best effort: the error may be a full disk).
             if summary.message.is_none() {
+                // (The error may come after a complete load path: the run still failed.)
+                summary.converged = false;
                 summary.message = Some(e.to_string());
                 summary.timings = phases.timings();
                 if rank == 0 {
@@ -691,6 +700,18 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
             }
             Err(e)
         }
+    }
+}
+
+/// The outcome of a solve not started because the run is stopping on `signal`.
+fn not_started(signal: i32) -> crate::petsc::snes::SnesOutcome {
+    crate::petsc::snes::SnesOutcome {
+        converged: false,
+        reason: "INTERRUPTED",
+        iterations: 0,
+        linear_iterations: 0,
+        residual_history: Vec::new(),
+        domain_error: Some(format!("interrupted by {}", interrupt::name(signal))),
     }
 }
 
