@@ -81,7 +81,7 @@ pub fn watch() -> std::io::Result<()> {
 }
 
 /// The signal this process received, if any (local: see [`agreed`]).
-pub fn received() -> Option<i32> {
+fn received() -> Option<i32> {
     let signal = RECEIVED.get()?.load(Ordering::SeqCst);
     (signal != 0).then_some(signal as i32)
 }
