@@ -297,8 +297,13 @@ fn an_interrupted_run_stops_with_its_finished_steps_on_disk() {
         );
     }
     let stdout = String::from_utf8_lossy(&out.stdout);
-    let last = format!("mortar: interrupted -> {}", out_dir.display());
-    assert!(stdout.trim_end().ends_with(&last), "{stdout}");
+    let last = stdout.trim_end().lines().last().unwrap_or_default();
+    let said = format!("mortar: interrupted: {steps} steps, ");
+    assert!(last.starts_with(&said), "{stdout}");
+    assert!(
+        last.ends_with(&format!(" -> {}", out_dir.display())),
+        "{stdout}"
+    );
 }
 
 /// A run started with SIGINT ignored (a background job of a script) keeps ignoring it: the

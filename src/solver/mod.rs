@@ -662,7 +662,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         }
         results.agree(&world)?;
         say(format!(
-            "mortar: {} -> {}",
+            "mortar: {}: {} -> {}",
             match (summary.completed, unconverged) {
                 (true, 0) => "converged".to_string(),
                 (true, n) => format!(
@@ -671,6 +671,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                 (false, _) if interrupted.is_some() => "interrupted".to_string(),
                 (false, _) => "FAILED".to_string(),
             },
+            totals(&summary, t_setup.elapsed().as_secs_f64()),
             opts.out_dir.display()
         ));
         match &summary.message {
@@ -701,6 +702,23 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
             Err(e)
         }
     }
+}
+
+/// The run's totals for its last progress line: `50 steps, 160 Newton its, 2 cuts, 4.21 s`
+/// (cuts and Uzawa augmentations when there were any).
+fn totals(summary: &Summary, seconds: f64) -> String {
+    let steps = &summary.steps;
+    let newton: usize = steps.iter().map(|s| s.newton_its).sum();
+    let mut text = format!("{} steps, {newton} Newton its", steps.len());
+    let cuts: usize = steps.iter().map(|s| s.cut).sum();
+    if cuts > 0 {
+        text += &format!(", {cuts} cuts");
+    }
+    let augmentations: usize = steps.iter().map(|s| s.augmentations).sum();
+    if augmentations > 0 {
+        text += &format!(", {augmentations} Uzawa augmentations");
+    }
+    text + &format!(", {seconds:.2} s")
 }
 
 /// The outcome of a solve not started because the run is stopping on `signal`.
@@ -1029,9 +1047,10 @@ fn residual_scale(
     })
 }
 
-/// A load factor in messages and progress lines: as asked (`{}` or `{:.6}`), or in scientific
-/// notation when it is tiny (a step cut many times), where the plain forms would run to a
-/// hundred digits or show only zeros.
+/// A load factor in messages and progress lines: as asked (`{:.6}`), or with `{}` to 12
+/// decimals without trailing zeros (the load accumulates its steps, `0.1 + 0.2` reads `0.3`,
+/// not `0.30000000000000004`), or in scientific notation when it is tiny (a step cut many
+/// times), where the plain forms would run to a hundred digits or show only zeros.
 struct Load(f64);
 
 impl std::fmt::Display for Load {
@@ -1040,7 +1059,10 @@ impl std::fmt::Display for Load {
         match f.precision() {
             _ if t != 0.0 && t.abs() < 1e-4 => write!(f, "{t:.6e}"),
             Some(digits) => write!(f, "{t:.digits$}"),
-            None => write!(f, "{t}"),
+            None => {
+                let fixed = format!("{t:.12}");
+                write!(f, "{}", fixed.trim_end_matches('0').trim_end_matches('.'))
+            }
         }
     }
 }
@@ -1054,6 +1076,9 @@ mod tests {
         assert_eq!(format!("{:.6}", Load(0.5)), "0.500000");
         assert_eq!(format!("{}", Load(0.15625)), "0.15625");
         assert_eq!(format!("{}", Load(0.0)), "0");
+        assert_eq!(format!("{}", Load(1.0)), "1");
+        assert_eq!(format!("{}", Load(0.1 + 0.2)), "0.3");
+        assert_eq!(format!("{}", Load(13.0 * 0.02)), "0.26");
         // A step cut 483 times: not 150 digits, not zeros.
         let tiny = 0.5f64.powi(483);
         assert_eq!(format!("{}", Load(tiny)), format!("{tiny:.6e}"));
