@@ -335,6 +335,46 @@ fn a_run_started_with_sigint_ignored_keeps_ignoring_it() {
     assert_eq!(s["steps"].as_array().unwrap().len(), 200);
 }
 
+/// A second run into a folder a run is writing into is refused at once, with one line naming
+/// the folder (the two used to mix their files: `summary.json` and `history.csv` have the same
+/// names for every case); the first run ends unharmed, and a run after it works (the lock goes
+/// with the process that held it).
+#[test]
+fn a_folder_another_run_is_writing_into_is_refused() {
+    let case = common::write_case("folder_in_use", &common::slide_case(100));
+    let out_dir = case.parent().unwrap().join("out");
+    let first = common::start_until(
+        common::subcommand("run", &case, 1, &out_dir, &[]),
+        "  step 2 ",
+    );
+    first.running_process(0);
+    let second = common::run_raw(&case, 1, &out_dir, &["-q"]);
+    let stderr = String::from_utf8_lossy(&second.stderr);
+    assert_eq!(second.status.code(), Some(1), "{stderr}");
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert_eq!(lines.len(), 1, "{stderr}");
+    let said = format!(
+        "mortar: error: output: {}: another run is writing into this folder",
+        out_dir.display()
+    );
+    assert!(lines[0].starts_with(&said), "{stderr}");
+    let first = first.finish();
+    assert!(
+        first.status.success(),
+        "{}",
+        String::from_utf8_lossy(&first.stderr)
+    );
+    let s = common::summary(&out_dir);
+    assert_eq!(s["converged"], true);
+    assert_eq!(s["steps"].as_array().unwrap().len(), 100);
+    let third = common::run_raw(&case, 1, &out_dir, &["-q"]);
+    assert!(
+        third.status.success(),
+        "{}",
+        String::from_utf8_lossy(&third.stderr)
+    );
+}
+
 /// With no cuts allowed the same scene fails: one clear line, exit 1, and a summary that says
 /// so (finished steps, none here, stay on disk).
 #[test]

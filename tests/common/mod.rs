@@ -145,11 +145,19 @@ pub fn subcommand(
     cmd
 }
 
-/// Starts `command` (a run or study, its progress on stdout), waits for a progress line that
-/// starts with `after` (`"  step 2 "`), sends `signal` (a name `kill` knows: `INT`, `TERM`) to the process of rank
-/// `rank` (the command's own process when it is not mpirun), and returns the output.
-pub fn run_and_signal(mut command: Command, after: &str, signal: &str, rank: usize) -> Output {
-    use std::io::{BufRead, Read};
+/// A command started, its stdout read up to a line ([`start_until`]).
+pub struct Started {
+    child: std::process::Child,
+    stdout: std::io::BufReader<std::process::ChildStdout>,
+    /// The stdout read so far.
+    seen: String,
+    is_mpirun: bool,
+}
+
+/// Starts `command` (a run or study, its progress on stdout) and waits for a progress line that
+/// starts with `after` (`"  step 2 "`).
+pub fn start_until(mut command: Command, after: &str) -> Started {
+    use std::io::BufRead;
     let mut child = command
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::piped())
@@ -167,27 +175,55 @@ pub fn run_and_signal(mut command: Command, after: &str, signal: &str, rank: usi
         }
     }
     let is_mpirun = command.get_program() == "mpirun";
-    let pid = if is_mpirun {
-        rank_process(child.id(), rank)
-    } else {
-        child.id()
-    };
-    // Not a zombie: a run that ended before the signal would make the test prove nothing.
-    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
-    let state = stat.rsplit(')').next().unwrap_or("").trim_start();
-    assert!(
-        !state.is_empty() && !state.starts_with('Z'),
-        "the process ended before the signal:\n{seen}"
-    );
+    Started {
+        child,
+        stdout,
+        seen,
+        is_mpirun,
+    }
+}
+
+impl Started {
+    /// The process of rank `rank` (the command's own when it is not mpirun), still running: a
+    /// run that ended already would make a test of what happens while it runs prove nothing.
+    pub fn running_process(&self, rank: usize) -> u32 {
+        let pid = if self.is_mpirun {
+            rank_process(self.child.id(), rank)
+        } else {
+            self.child.id()
+        };
+        let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
+        let state = stat.rsplit(')').next().unwrap_or("").trim_start();
+        assert!(
+            !state.is_empty() && !state.starts_with('Z'),
+            "the process ended too early:\n{}",
+            self.seen
+        );
+        pid
+    }
+
+    /// Waits for the end; the output with the whole stdout.
+    pub fn finish(mut self) -> Output {
+        use std::io::Read;
+        self.stdout.read_to_string(&mut self.seen).unwrap();
+        let mut out = self.child.wait_with_output().unwrap();
+        out.stdout = self.seen.into_bytes();
+        out
+    }
+}
+
+/// Starts `command` as [`start_until`] does, sends `signal` (a name `kill` knows: `INT`,
+/// `TERM`) to the process of rank `rank` (the command's own process when it is not mpirun),
+/// and returns the output.
+pub fn run_and_signal(command: Command, after: &str, signal: &str, rank: usize) -> Output {
+    let started = start_until(command, after);
+    let pid = started.running_process(rank);
     let killed = Command::new("kill")
         .args([format!("-{signal}"), pid.to_string()])
         .status()
         .unwrap();
     assert!(killed.success(), "kill -{signal} {pid}");
-    stdout.read_to_string(&mut seen).unwrap();
-    let mut out = child.wait_with_output().unwrap();
-    out.stdout = seen.into_bytes();
-    out
+    started.finish()
 }
 
 /// The process of rank `rank` among the children of mpirun's process `mpirun`.
