@@ -193,7 +193,7 @@ use serde::Deserialize;
 use crate::case::Scene;
 use crate::error::{print_warning, Error, Result};
 use crate::io::case_file::one_line;
-use crate::io::output::{read_csv, write_atomic, Summary};
+use crate::io::output::{lock_folder, read_csv, write_atomic, Summary};
 use crate::io::plot;
 use crate::petsc::Petsc;
 use crate::solver::{self, RunOptions};
@@ -782,9 +782,18 @@ impl Study {
                 ),
             });
         }
-        if rank == 0 {
-            std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+        // The folder's lock (rank 0), held to the study's end: a second study (or run) into
+        // it would empty the run folders of this one.
+        let locked = if rank == 0 {
+            lock_folder(out)
+        } else {
+            Ok(None)
+        };
+        let failure = locked.as_ref().err().map(|e| e.to_string());
+        if let Some(m) = crate::solver::first_rank_text(&petsc.world(), failure.as_deref()) {
+            return Err(Error::Output(m));
         }
+        let _lock = locked.ok().flatten();
         let started = Instant::now();
         let total = self.variants.len() * self.refinements.len();
         say(format!(

@@ -179,6 +179,7 @@ fn a_rerun_replaces_the_earlier_outputs() {
             "displacement.csv",
             "notes.txt",
             "vtu",
+            ".mortar.lock",
             "{c}.pvd",
             "{c}_0001.pvtu",
             "{c}_0002.pvtu",
@@ -338,7 +339,7 @@ fn a_run_started_with_sigint_ignored_keeps_ignoring_it() {
 /// A second run into a folder a run is writing into is refused at once, with one line naming
 /// the folder (the two used to mix their files: `summary.json` and `history.csv` have the same
 /// names for every case); the first run ends unharmed, and a run after it works (the lock goes
-/// with the process that held it).
+/// with the process that held it; its empty file stays).
 #[test]
 fn a_folder_another_run_is_writing_into_is_refused() {
     let case = common::write_case("folder_in_use", &common::slide_case(100));
@@ -347,8 +348,10 @@ fn a_folder_another_run_is_writing_into_is_refused() {
         common::subcommand("run", &case, 1, &out_dir, &[]),
         "  step 2 ",
     );
-    first.running_process(0);
+    // Held still while the second run starts, so that it surely meets the first one running.
+    first.signal(0, "STOP");
     let second = common::run_raw(&case, 1, &out_dir, &["-q"]);
+    first.signal(0, "CONT");
     let stderr = String::from_utf8_lossy(&second.stderr);
     assert_eq!(second.status.code(), Some(1), "{stderr}");
     let lines: Vec<&str> = stderr.lines().collect();

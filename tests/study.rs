@@ -1300,18 +1300,16 @@ fn a_variant_on_more_ranks_than_the_job_is_refused_cleanly() {
     );
 }
 
-/// Ctrl-C (SIGINT) during a study's second run: the study stops there with exit status 130 and
-/// one line naming the signal, the run and where the finished run is; `study.csv` holds that
-/// run alone.
-#[test]
-fn an_interrupted_study_keeps_the_runs_it_finished() {
-    let dir = common::fresh_dir("study_interrupted");
+/// A folder with the slide case and a study of it whose first variant (and the warm-up, a run
+/// of it) is short and whose second is long (2 000 steps): a study that can be caught inside
+/// its second run.
+fn long_study_dir(name: &str) -> PathBuf {
+    let dir = common::fresh_dir(name);
     std::fs::write(dir.join("case.toml"), common::slide_case(2000)).unwrap();
     let mut study = String::from(
         "case = \"case.toml\"\nmetric = \"max_newton_its\"\ntitle = \"t\"\n\
          [[refinement]]\nh = 1.0\nset = {}\n",
     );
-    // The first variant (and the warm-up, a run of it) short, the second long.
     for (name, set) in [
         ("a", "\"steps.count\" = 20"),
         ("b", "\"interface.0.friction\" = 0.2"),
@@ -1320,6 +1318,15 @@ fn an_interrupted_study_keeps_the_runs_it_finished() {
         study += &format!("[[variant]]\nname = \"{name}\"\nset = {{ {set} }}\n");
     }
     std::fs::write(dir.join("study.toml"), study).unwrap();
+    dir
+}
+
+/// Ctrl-C (SIGINT) during a study's second run: the study stops there with exit status 130 and
+/// one line naming the signal, the run and where the finished run is; `study.csv` holds that
+/// run alone.
+#[test]
+fn an_interrupted_study_keeps_the_runs_it_finished() {
+    let dir = long_study_dir("study_interrupted");
     let out_dir = dir.join("out");
     let run = common::subcommand("study", &dir.join("study.toml"), 1, &out_dir, &[]);
     let o = common::run_and_signal(run, "  a level 0 ", "INT", 0);
@@ -1340,4 +1347,35 @@ fn an_interrupted_study_keeps_the_runs_it_finished() {
     let rows = csv_rows(&out_dir);
     assert_eq!(rows.len(), 1, "{rows:?}");
     assert_eq!(rows[0]["variant"], "a");
+}
+
+/// A second study into the folder of a running one is refused at once, with one line naming
+/// the folder (it used to empty the first one's run folders and write beside it); the first
+/// goes on, its finished run intact.
+#[test]
+fn a_study_into_the_folder_of_a_running_one_is_refused() {
+    let dir = long_study_dir("study_folder_in_use");
+    let out_dir = dir.join("out");
+    let study =
+        |args: &[&str]| common::subcommand("study", &dir.join("study.toml"), 1, &out_dir, args);
+    let first = common::start_until(study(&[]), "  a level 0 ");
+    // Held still while the second study starts, so that it surely meets the first one.
+    first.signal(0, "STOP");
+    let second = study(&["-q"]).output().unwrap();
+    first.signal(0, "CONT");
+    let line = one_error_line(&second);
+    let said = format!(
+        "mortar: error: output: {}: another run is writing into this folder",
+        out_dir.display()
+    );
+    assert!(line.starts_with(&said), "{line}");
+    assert_eq!(second.status.code(), Some(1));
+    // The first study: its run of 'a' still there; ended early by a Ctrl-C.
+    first.signal(0, "INT");
+    let first = first.finish();
+    assert_eq!(first.status.code(), Some(130), "{}", text(&first.stderr));
+    let rows = csv_rows(&out_dir);
+    assert_eq!(rows.len(), 1, "{rows:?}");
+    assert_eq!(rows[0]["variant"], "a");
+    assert!(out_dir.join("runs/a/0/summary.json").is_file());
 }

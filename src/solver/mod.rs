@@ -231,6 +231,8 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         // Fallbacks before the current step's first attempt (for its progress line).
         let mut fallbacks_before = 0usize;
         let mut unconverged = 0usize;
+        // Newton iterations and cuts of every attempt, failed ones included (the last line).
+        let (mut newton_all, mut cuts_all) = (0usize, 0usize);
         // The signal's name, once the ranks agreed to stop on one (`interrupt`).
         let mut interrupted: Option<String> = None;
         // The signal a Jacobian evaluation agreed to stop on: the solve under way ends, and any
@@ -410,6 +412,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
             };
             snes.force_iteration(false)?;
             drop(solve_guard);
+            newton_all += newton_total;
             let assembly = state.borrow().assembly_seconds;
             let solve_seconds = t_solve.elapsed().as_secs_f64();
             phases.add("assembly", assembly);
@@ -451,10 +454,8 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                     .domain_error
                     .clone()
                     .unwrap_or_else(|| outcome.reason.to_string());
-                // Bounded in depth, not only in a row: fail/converge cycles cannot shrink the step
-                // below dt_nominal / 2^max_cuts.
-                let no_cuts_left = cuts_in_row + 1 > scene.max_cuts;
-                let giving_up = no_cuts_left || 0.5 * dt < dt_min;
+                let limit = cut_limit(cuts_in_row, scene.max_cuts, dt, dt_min);
+                let giving_up = limit.is_some();
                 // `steps.on_failure = "continue"`: with no cut left, a state Newton reached
                 // inside the domain is the step's (unconverged) result.
                 accepted_unconverged = giving_up
@@ -464,20 +465,21 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                 if !accepted_unconverged {
                     newton_tangent = NewtonTangent::Other;
                     cuts_in_row += 1;
+                    cuts_all += 1;
                     x_prev.copy_to(&mut x)?;
                     model.tying.set_multipliers(&multipliers);
                     model.contact.restore(&contact_saved);
                     let load_new = Load(t_new);
-                    // Which limit stopped the step: the cuts in a row, or its size (the
-                    // nominal step halved max_cuts times).
-                    let limit = if no_cuts_left {
-                        format!("no cuts left ({} allowed)", scene.max_cuts)
-                    } else {
-                        format!(
+                    let limit = match limit {
+                        Some(CutLimit::CutsInRow) => {
+                            format!("no cuts left ({} allowed)", scene.max_cuts)
+                        }
+                        Some(CutLimit::SmallestStep) => format!(
                             "the step ({dt:.3e} of the load) is the smallest allowed \
                              (steps.max_cuts = {})",
                             scene.max_cuts
-                        )
+                        ),
+                        None => String::new(),
                     };
                     say(format!(
                         "  step {} load {load_new:.6}: not converged ({why}) after {} Newton its; {}",
@@ -671,7 +673,11 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                 (false, _) if interrupted.is_some() => "interrupted".to_string(),
                 (false, _) => "FAILED".to_string(),
             },
-            totals(&summary, t_setup.elapsed().as_secs_f64()),
+            totals(
+                &summary,
+                [newton_all, cuts_all],
+                t_setup.elapsed().as_secs_f64()
+            ),
             opts.out_dir.display()
         ));
         match &summary.message {
@@ -704,21 +710,46 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
     }
 }
 
+/// What stops a failed step from being cut again.
+#[derive(Debug, PartialEq)]
+enum CutLimit {
+    /// `steps.max_cuts` cuts in a row.
+    CutsInRow,
+    /// The step is the nominal one halved `max_cuts` times: bounded in depth, not only in a
+    /// row, so that fail and converge cycles cannot shrink it further.
+    SmallestStep,
+}
+
+/// The limit a failed step of size `dt` meets after `cuts_in_row` cuts in a row (`dt_min`: the
+/// smallest step allowed, a hair below the nominal one halved `max_cuts` times), if any.
+fn cut_limit(cuts_in_row: usize, max_cuts: usize, dt: f64, dt_min: f64) -> Option<CutLimit> {
+    if cuts_in_row + 1 > max_cuts {
+        Some(CutLimit::CutsInRow)
+    } else if 0.5 * dt < dt_min {
+        Some(CutLimit::SmallestStep)
+    } else {
+        None
+    }
+}
+
 /// The run's totals for its last progress line: `50 steps, 160 Newton its, 2 cuts, 4.21 s`
-/// (cuts and Uzawa augmentations when there were any).
-fn totals(summary: &Summary, seconds: f64) -> String {
-    let steps = &summary.steps;
-    let newton: usize = steps.iter().map(|s| s.newton_its).sum();
-    let mut text = format!("{} steps, {newton} Newton its", steps.len());
-    let cuts: usize = steps.iter().map(|s| s.cut).sum();
+/// (`[newton, cuts]` of every attempt, failed ones included; cuts and the Uzawa augmentations
+/// of the finished steps when there were any).
+fn totals(summary: &Summary, [newton, cuts]: [usize; 2], seconds: f64) -> String {
+    let count = |n: usize, what: &str| format!("{n} {what}{}", if n == 1 { "" } else { "s" });
+    let mut parts = vec![
+        count(summary.steps.len(), "step"),
+        format!("{newton} Newton its"),
+    ];
     if cuts > 0 {
-        text += &format!(", {cuts} cuts");
+        parts.push(count(cuts, "cut"));
     }
-    let augmentations: usize = steps.iter().map(|s| s.augmentations).sum();
+    let augmentations: usize = summary.steps.iter().map(|s| s.augmentations).sum();
     if augmentations > 0 {
-        text += &format!(", {augmentations} Uzawa augmentations");
+        parts.push(count(augmentations, "Uzawa augmentation"));
     }
-    text + &format!(", {seconds:.2} s")
+    parts.push(format!("{seconds:.2} s"));
+    parts.join(", ")
 }
 
 /// The outcome of a solve not started because the run is stopping on `signal`.
@@ -1055,7 +1086,7 @@ struct Load(f64);
 
 impl std::fmt::Display for Load {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let t = self.0;
+        let t = self.0 + 0.0; // (-0 prints as 0)
         match f.precision() {
             _ if t != 0.0 && t.abs() < 1e-4 => write!(f, "{t:.6e}"),
             Some(digits) => write!(f, "{t:.digits$}"),
@@ -1069,7 +1100,25 @@ impl std::fmt::Display for Load {
 
 #[cfg(test)]
 mod tests {
-    use super::Load;
+    use super::{cut_limit, CutLimit, Load};
+
+    /// `steps.max_cuts = 2`, nominal step 0.01: a step cut twice in a row has no cut left; a
+    /// step at a quarter of the nominal one after one cut in a row (cut twice before, then
+    /// converged and grown back by one doubling) is at the smallest size instead (the sliding
+    /// blocks' case 5 of Figure 7 ends so).
+    #[test]
+    fn a_failed_step_meets_the_limit_it_reached() {
+        let (nominal, max_cuts) = (0.01, 2);
+        let dt_min = nominal * 0.25 * (1.0 - 1e-12);
+        let limit = |cuts, dt| cut_limit(cuts, max_cuts, dt, dt_min);
+        assert_eq!(limit(0, nominal), None);
+        assert_eq!(limit(1, nominal / 2.0), None);
+        assert_eq!(limit(2, nominal / 4.0), Some(CutLimit::CutsInRow));
+        assert_eq!(limit(2, nominal), Some(CutLimit::CutsInRow));
+        assert_eq!(limit(1, nominal / 4.0), Some(CutLimit::SmallestStep));
+        assert_eq!(limit(0, nominal / 4.0), Some(CutLimit::SmallestStep));
+        assert_eq!(cut_limit(0, 0, nominal, nominal), Some(CutLimit::CutsInRow));
+    }
 
     #[test]
     fn loads_print_as_asked_unless_tiny() {
@@ -1079,6 +1128,7 @@ mod tests {
         assert_eq!(format!("{}", Load(1.0)), "1");
         assert_eq!(format!("{}", Load(0.1 + 0.2)), "0.3");
         assert_eq!(format!("{}", Load(13.0 * 0.02)), "0.26");
+        assert_eq!(format!("{}", Load(-0.0)), "0");
         // A step cut 483 times: not 150 digits, not zeros.
         let tiny = 0.5f64.powi(483);
         assert_eq!(format!("{}", Load(tiny)), format!("{tiny:.6e}"));

@@ -35,7 +35,9 @@ use super::model::Model;
 use crate::case::Scene;
 use crate::dofs::DofMap;
 use crate::error::{Error, Result};
-use crate::io::output::{write_pvd, write_pvtu, write_vtu, Field, History, Piece, Summary};
+use crate::io::output::{
+    lock_folder, write_pvd, write_pvtu, write_vtu, Field, FolderLock, History, Piece, Summary,
+};
 use crate::solid::element_stress;
 
 /// One converged step, as a history row: `step, load, newton_its, augmentations, cuts,
@@ -75,7 +77,7 @@ pub struct Results {
     reaction_sets: Vec<(String, Vec<usize>)>,
     /// The first write of this rank that failed since the last [`Results::agree`].
     failed: Option<Error>,
-    /// Rank 0's lock on the folder ([`FolderLock`]), held for the run's life.
+    /// Rank 0's lock on the folder ([`lock_folder`]), held for the run's life.
     _lock: Option<FolderLock>,
 }
 
@@ -94,7 +96,7 @@ impl Results {
         let (rank, ranks) = (world.rank() as usize, world.size() as usize);
         let (prepared, lock) = if rank == 0 {
             match lock_folder(dir) {
-                Ok(lock) => (prepare_folder(dir, &scene.name), Some(lock)),
+                Ok(lock) => (prepare_folder(dir, &scene.name), lock),
                 Err(e) => (Err(e), None),
             }
         } else {
@@ -908,46 +910,6 @@ fn write_interface_piece(
         cell_data: vec![],
     };
     write_vtu(path, &piece)
-}
-
-/// The lock file of a run's folder.
-const LOCK_FILE: &str = ".mortar.lock";
-
-/// A run's lock on its folder, `dir/.mortar.lock`: two runs writing into one folder would mix
-/// their files (`summary.json` and `history.csv` have the same names for every case), so a
-/// second run is refused while the first runs. An advisory `flock`, which the system releases
-/// when the process ends, however it ends: a killed run leaves the (empty) file, never a
-/// stale lock. The file is removed when the run ends.
-struct FolderLock {
-    path: PathBuf,
-    _file: std::fs::File,
-}
-
-impl Drop for FolderLock {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.path);
-    }
-}
-
-/// Creates `dir` and takes its [`FolderLock`].
-fn lock_folder(dir: &Path) -> Result<FolderLock> {
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    let path = dir.join(LOCK_FILE);
-    let file = std::fs::OpenOptions::new()
-        .create(true)
-        .truncate(false)
-        .write(true)
-        .open(&path)
-        .map_err(|e| Error::io(&path, e))?;
-    match file.try_lock() {
-        Ok(()) => Ok(FolderLock { path, _file: file }),
-        Err(std::fs::TryLockError::WouldBlock) => Err(Error::Other(format!(
-            "{}: another run is writing into this folder (it holds {LOCK_FILE}); wait for \
-             it to end, or give this one another --out",
-            dir.display()
-        ))),
-        Err(std::fs::TryLockError::Error(e)) => Err(Error::io(&path, e)),
-    }
 }
 
 /// Creates `dir/vtu` and removes the outputs an earlier run of case `case` left in `dir`

@@ -202,6 +202,17 @@ impl Started {
         pid
     }
 
+    /// Sends `signal` (a name `kill` knows: `INT`, `TERM`, `STOP`, `CONT`) to the running
+    /// process of rank `rank`.
+    pub fn signal(&self, rank: usize, signal: &str) {
+        let pid = self.running_process(rank);
+        let sent = Command::new("kill")
+            .args([format!("-{signal}"), pid.to_string()])
+            .status()
+            .unwrap();
+        assert!(sent.success(), "kill -{signal} {pid}");
+    }
+
     /// Waits for the end; the output with the whole stdout.
     pub fn finish(mut self) -> Output {
         use std::io::Read;
@@ -217,12 +228,7 @@ impl Started {
 /// and returns the output.
 pub fn run_and_signal(command: Command, after: &str, signal: &str, rank: usize) -> Output {
     let started = start_until(command, after);
-    let pid = started.running_process(rank);
-    let killed = Command::new("kill")
-        .args([format!("-{signal}"), pid.to_string()])
-        .status()
-        .unwrap();
-    assert!(killed.success(), "kill -{signal} {pid}");
+    started.signal(rank, signal);
     started.finish()
 }
 

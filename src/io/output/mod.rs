@@ -1,4 +1,5 @@
-//! Result files: VTK XML output for ParaView, the CSV load history and `summary.json`.
+//! Result files: VTK XML output for ParaView, the CSV load history and `summary.json`, and the
+//! lock that keeps two runs out of one folder ([`lock_folder`]).
 //!
 //! This layer knows nothing about MPI: every function takes plain data, and the caller decides
 //! which rank writes which file (typically each rank its own `.vtu` piece, rank 0 the `.pvtu`,
@@ -40,11 +41,13 @@
 
 mod base64;
 mod history;
+mod lock;
 mod summary;
 mod vtk;
 
 pub use base64::{decode as base64_decode, encode as base64_encode};
 pub use history::{read_csv, History};
+pub use lock::{lock_folder, FolderLock, LOCK_FILE};
 pub use summary::{StepRecord, Summary};
 pub use vtk::{vtu_document, write_pvd, write_pvtu, write_vtu, Field, Piece};
 
