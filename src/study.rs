@@ -789,11 +789,11 @@ impl Study {
         } else {
             Ok(None)
         };
-        let failure = locked.as_ref().err().map(|e| e.to_string());
-        if let Some(m) = crate::solver::first_rank_text(&petsc.world(), failure.as_deref()) {
-            return Err(Error::Output(m));
-        }
-        let _lock = locked.ok().flatten();
+        let (agreed, _lock) = match locked {
+            Ok(lock) => (Ok(()), lock),
+            Err(e) => (Err(e), None),
+        };
+        crate::solver::agree_on(&petsc.world(), agreed)?;
         let started = Instant::now();
         let total = self.variants.len() * self.refinements.len();
         say(format!(

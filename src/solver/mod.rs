@@ -233,14 +233,13 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         let mut unconverged = 0usize;
         // Newton iterations and cuts of every attempt, failed ones included (the last line).
         let (mut newton_all, mut cuts_all) = (0usize, 0usize);
-        // The signal's name, once the ranks agreed to stop on one (`interrupt`).
-        let mut interrupted: Option<String> = None;
-        // The signal a Jacobian evaluation agreed to stop on: the solve under way ends, and any
-        // later solve of the step returns at once.
+        // The signal the ranks agreed to stop on (`interrupt`): at a step's start, or in a
+        // Jacobian evaluation, which ends the solve under way (any later solve of the step
+        // returns at once).
         let stop = std::cell::Cell::new(None);
         while t < 1.0 - 1e-12 {
             if let Some(signal) = interrupt::agreed(&world) {
-                interrupted = Some(interrupt::name(signal));
+                stop.set(Some(signal));
                 break;
             }
             let t_new = if t + dt > 1.0 - 1e-9 { 1.0 } else { t + dt };
@@ -440,13 +439,12 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                 )));
             }
             let mut accepted_unconverged = false;
-            if let (false, Some(signal)) = (outcome.converged, stop.get()) {
+            if !outcome.converged && stop.get().is_some() {
                 // Stopped by a signal: the run ends at the last finished step, as a failed
                 // one does.
                 x_prev.copy_to(&mut x)?;
                 model.tying.set_multipliers(&multipliers);
                 model.contact.restore(&contact_saved);
-                interrupted = Some(interrupt::name(signal));
                 break;
             }
             if !outcome.converged {
@@ -590,6 +588,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         }
         summary.completed = t >= 1.0 - 1e-12;
         summary.converged = summary.completed && unconverged == 0;
+        let interrupted = stop.get().map(interrupt::name);
         if let Some(signal) = &interrupted {
             summary.message = Some(interruption(signal, &summary, &opts.out_dir));
         }
@@ -1050,6 +1049,16 @@ pub(crate) fn first_rank_text(
     bytes.resize(len as usize, 0);
     root.broadcast_into(&mut bytes[..]);
     Some(String::from_utf8_lossy(&bytes).into_owned())
+}
+
+/// Collective: every rank returns `Ok` when `mine` is `Ok` on every rank, else the error of the
+/// lowest failing rank as [`Error::Output`] (its message sent to all).
+pub(crate) fn agree_on(world: &mpi::topology::SimpleCommunicator, mine: Result<()>) -> Result<()> {
+    let message = mine.err().map(|e| e.to_string());
+    match first_rank_text(world, message.as_deref()) {
+        Some(m) => Err(Error::Output(m)),
+        None => Ok(()),
+    }
 }
 
 /// The norm of the residual at u = 0 under the full load: the force scale of the absolute

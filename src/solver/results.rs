@@ -102,7 +102,7 @@ impl Results {
         } else {
             (Ok(()), None)
         };
-        agree_on(world, prepared)?;
+        super::agree_on(world, prepared)?;
         // Every rank writes its pieces there (its own view of the folder, where ranks do not
         // share a file system's cache).
         if rank != 0 {
@@ -263,7 +263,7 @@ impl Results {
     /// rank returns the first failing rank's error as [`Error::Output`].
     pub fn agree(&mut self, world: &mpi::topology::SimpleCommunicator) -> Result<()> {
         let failed = self.failed.take().map_or(Ok(()), Err);
-        agree_on(world, failed)
+        super::agree_on(world, failed)
     }
 
     /// Writes this rank's VTU piece; once every rank has written its own (agreed on:
@@ -994,16 +994,6 @@ fn temporary_target(name: &str) -> Option<&str> {
     let inner = name.strip_prefix('.')?.strip_suffix(".tmp")?;
     let (target, pid) = inner.rsplit_once('.')?;
     (!pid.is_empty() && pid.bytes().all(|b| b.is_ascii_digit())).then_some(target)
-}
-
-/// Collective: every rank returns `Ok` when `mine` is `Ok` on every rank, else the error of the
-/// lowest failing rank as [`Error::Output`] (its message sent to all).
-fn agree_on(world: &mpi::topology::SimpleCommunicator, mine: Result<()>) -> Result<()> {
-    let message = mine.err().map(|e| e.to_string());
-    match super::first_rank_text(world, message.as_deref()) {
-        Some(m) => Err(Error::Output(m)),
-        None => Ok(()),
-    }
 }
 
 #[cfg(test)]

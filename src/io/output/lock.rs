@@ -15,7 +15,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use crate::error::{print_warning, Error, Result};
 
 /// The lock file's name in a locked folder.
-pub const LOCK_FILE: &str = ".mortar.lock";
+const LOCK_FILE: &str = ".mortar.lock";
 
 /// A folder's lock, held while this value lives.
 #[derive(Debug)]

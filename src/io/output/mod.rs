@@ -47,7 +47,7 @@ mod vtk;
 
 pub use base64::{decode as base64_decode, encode as base64_encode};
 pub use history::{read_csv, History};
-pub use lock::{lock_folder, FolderLock, LOCK_FILE};
+pub use lock::{lock_folder, FolderLock};
 pub use summary::{StepRecord, Summary};
 pub use vtk::{vtu_document, write_pvd, write_pvtu, write_vtu, Field, Piece};
 
