@@ -115,10 +115,14 @@
 //! `dw/dP`, `dxi_s/dP` and `dxi_m/dP`, plus `dw/dx_s`; the points of a pallet are tabulated (one
 //! coefficient per entry and direction) and added by matrix products (`nalgebra`'s `gemm`, which
 //! uses the vectorized `matrixmultiply` kernels; the `n1` rows without the `dxi_m` directions),
-//! then chained with `dP/dy` once per sub-segment pair. Scheme 3 skips the traction nodes that
-//! are not vertices of the secondary sub-segment. Nothing is allocated per point. Measured
-//! (release, one core, the pairs of `benches/mortar.rs`, scheme 2): Quad4-Quad4 35 us per pair
-//! (7 times `integrate_pair`), Quad9-Quad9 0.90 ms (9 times).
+//! then chained with `dP/dy` once per sub-segment pair, without the block of `dP/dy` that is
+//! zero (the plane coordinates of the secondary vertices do not depend on the primary nodes),
+//! row by row into a buffer laid out as the output. Scheme 3 skips the traction nodes that are
+//! not vertices of the secondary sub-segment. Nothing is allocated per point, and nothing is
+//! cleared per sub-segment pair but its values (its first pallet overwrites the derivatives).
+//! Measured (release, one core, the pairs of `benches/mortar.rs`, scheme 2, 2026-11-23):
+//! Quad4-Quad4 27 us per pair (5.5 times `integrate_pair`), Quad9-Quad9 0.62 ms (7.5 times);
+//! 36 us and 0.90 ms with the full product and the buffers cleared per sub-segment pair.
 //!
 //! # Tests
 //!
@@ -135,7 +139,7 @@
 #[cfg(test)]
 mod dual_reference;
 
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DMatrixViewMut};
 use num_dual::DualSVec64;
 
 use super::clip::{PalletSplit, VertexOrigin};
@@ -1093,6 +1097,9 @@ impl PointValues {
 ///   the `n1` rows are zero and left out of their product;
 /// - `d(w Phi_k N_b)/dx_s = Phi_k N_b dw/dx_s`: the first block of the coefficients times
 ///   `dweight_dx` (`points x 3 ns`).
+///
+/// The first pallet of a sub-segment pair overwrites `plane` and `face`, the others add to them,
+/// so nothing is cleared between sub-segment pairs but the values.
 struct SubPairTangent {
     ns: usize,
     np: usize,
@@ -1102,12 +1109,17 @@ struct SubPairTangent {
     area: f64,
     /// Quadrature points tabulated.
     points_added: usize,
+    /// Pallets added to `plane` and `face` (rows `0..rows` of both hold data once it is not
+    /// zero).
+    pallets_added: usize,
     plane: DMatrix<f64>,
     face: DMatrix<f64>,
     /// The tabulation of one pallet (see above).
     coefficients: DMatrix<f64>,
     directions: DMatrix<f64>,
     dweight_dx: DMatrix<f64>,
+    /// `dn/dy` of the sub-segment pair, row-major (`rows x ndof`): scratch of `merge_into`.
+    derivatives: Vec<f64>,
     unresolved: usize,
     /// Scratch for the traction functions of one point.
     phi_scratch: Vec<ParentDual>,
@@ -1126,11 +1138,13 @@ impl SubPairTangent {
             values: vec![0.0; rows],
             area: 0.0,
             points_added: 0,
+            pallets_added: 0,
             plane: DMatrix::zeros(rows, PLANE_SLOTS),
             face: DMatrix::zeros(rows, 3 * ns),
             coefficients: DMatrix::zeros(rows, 5 * points),
             directions: DMatrix::zeros(5 * points, PLANE_SLOTS),
             dweight_dx: DMatrix::zeros(points, 3 * ns),
+            derivatives: vec![0.0; rows * out.ndof()],
             unresolved: 0,
             phi_scratch: Vec::with_capacity(MAX_NODES),
         }
@@ -1151,8 +1165,7 @@ impl SubPairTangent {
         self.values.fill(0.0);
         self.area = 0.0;
         self.points_added = 0;
-        self.plane.fill(0.0);
-        self.face.fill(0.0);
+        self.pallets_added = 0;
         self.unresolved = 0;
     }
 
@@ -1215,35 +1228,74 @@ impl SubPairTangent {
     fn add_pallet(&mut self) {
         let (rows1, rows) = self.rows();
         let q = self.points;
+        // The first pallet overwrites (`beta = 0`: the old contents are never read).
+        let beta = if self.pallets_added == 0 { 0.0 } else { 1.0 };
+        self.pallets_added += 1;
         self.plane.rows_mut(0, rows1).gemm(
             1.0,
             &self.coefficients.view((0, 0), (rows1, 3 * q)),
             &self.directions.rows(0, 3 * q),
-            1.0,
+            beta,
         );
         self.plane.rows_mut(rows1, rows - rows1).gemm(
             1.0,
             &self.coefficients.rows(rows1, rows - rows1),
             &self.directions,
-            1.0,
+            beta,
         );
         let c = self.coefficients.rows(0, rows);
         self.face
             .rows_mut(0, rows)
-            .gemm(1.0, &c.columns(0, self.points), &self.dweight_dx, 1.0);
+            .gemm(1.0, &c.columns(0, self.points), &self.dweight_dx, beta);
     }
 
     fn is_finite(&self) -> bool {
         let (_, rows) = self.rows();
-        let (plane, face) = (self.plane.rows(0, rows), self.face.rows(0, rows));
-        plane.iter().chain(face.iter()).all(|v| v.is_finite())
+        self.pallets_added == 0
+            || [&self.plane, &self.face].iter().all(|m| {
+                // The rows in use of each column (column-major storage).
+                m.as_slice()
+                    .chunks_exact(m.nrows())
+                    .all(|column| column[..rows].iter().all(|v| v.is_finite()))
+            })
     }
 
     /// Adds these weights to `out`, with `dn/dy = dn/dP dP/dy + dn/dx_s` (`chain = dP/dy`).
-    fn merge_into(&self, out: &mut LinearizedWeights, chain: &DMatrix<f64>) -> SubPairOutcome {
+    ///
+    /// The product skips the zeros of `dP/dy`: the plane coordinates of the secondary vertices
+    /// (the first `PRIMARY_SLOT` slots) do not depend on the primary coordinates. The terms
+    /// left out are exact zeros, so the sums are those of the full product.
+    fn merge_into(&mut self, out: &mut LinearizedWeights, chain: &DMatrix<f64>) -> SubPairOutcome {
         let ndof = out.ndof();
         let (rows1, rows) = self.rows();
-        let derivatives = self.plane.rows(0, rows) * chain;
+        if self.pallets_added == 0 {
+            // No pallet: zero weights and derivatives.
+            out.unresolved_vertices += self.unresolved;
+            return SubPairOutcome::Integrated { points: 0 };
+        }
+        let sec_dofs = self.face.ncols();
+        let derivatives = &mut self.derivatives[..rows * ndof];
+        // Row-major views of the secondary and the primary columns.
+        DMatrixViewMut::from_slice_with_strides_mut(derivatives, rows, sec_dofs, ndof, 1).gemm(
+            1.0,
+            &self.plane.rows(0, rows),
+            &chain.columns(0, sec_dofs),
+            0.0,
+        );
+        let primary_slots = PLANE_SLOTS - PRIMARY_SLOT;
+        DMatrixViewMut::from_slice_with_strides_mut(
+            &mut derivatives[sec_dofs..],
+            rows,
+            ndof - sec_dofs,
+            ndof,
+            1,
+        )
+        .gemm(
+            1.0,
+            &self.plane.view((0, PRIMARY_SLOT), (rows, primary_slots)),
+            &chain.view((PRIMARY_SLOT, sec_dofs), (primary_slots, ndof - sec_dofs)),
+            0.0,
+        );
         if !derivatives.iter().all(|v| v.is_finite()) {
             return SubPairOutcome::Failed(PairFailure::NonFinite);
         }
@@ -1259,10 +1311,11 @@ impl SubPairTangent {
                     let (r, e) = (first + i * count + b, k * count + b);
                     out_values[e] += self.values[r];
                     let row = &mut out_derivatives[e * ndof..(e + 1) * ndof];
-                    for (j, to) in row.iter_mut().enumerate() {
-                        *to += derivatives[(r, j)];
+                    let from = &derivatives[r * ndof..(r + 1) * ndof];
+                    for (to, d) in row.iter_mut().zip(from) {
+                        *to += d;
                     }
-                    for (j, to) in row[..self.face.ncols()].iter_mut().enumerate() {
+                    for (j, to) in row[..sec_dofs].iter_mut().enumerate() {
                         *to += self.face[(r, j)];
                     }
                 }
