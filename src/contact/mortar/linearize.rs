@@ -1109,8 +1109,8 @@ struct SubPairTangent {
     area: f64,
     /// Quadrature points tabulated.
     points_added: usize,
-    /// Pallets added to `plane` and `face` (rows `0..rows` of both hold data once it is not
-    /// zero).
+    /// Pallets added since `clear`. With none, `plane` and `face` hold an earlier pair's data
+    /// and stand for zero.
     pallets_added: usize,
     plane: DMatrix<f64>,
     face: DMatrix<f64>,
