@@ -117,12 +117,13 @@
 //! uses the vectorized `matrixmultiply` kernels; the `n1` rows without the `dxi_m` directions),
 //! then chained with `dP/dy` once per sub-segment pair, without the block of `dP/dy` that is
 //! zero (the plane coordinates of the secondary vertices do not depend on the primary nodes),
-//! row by row into a buffer laid out as the output. Scheme 3 skips the traction nodes that are
-//! not vertices of the secondary sub-segment. Nothing is allocated per point, and nothing is
-//! cleared per sub-segment pair but its values (its first pallet overwrites the derivatives).
-//! Measured (release, one core, the pairs of `benches/mortar.rs`, scheme 2, 2026-11-23):
-//! Quad4-Quad4 27 us per pair (5.5 times `integrate_pair`), Quad9-Quad9 0.62 ms (7.5 times);
-//! 36 us and 0.90 ms with the full product and the buffers cleared per sub-segment pair.
+//! into a row-major buffer whose rows are added to the output's. Scheme 3 skips the traction
+//! nodes that are not vertices of the secondary sub-segment. Nothing is allocated per point,
+//! and the derivative buffers are not cleared per sub-segment pair (its first pallet
+//! overwrites them). Measured (release, one core, the pairs of `benches/mortar.rs`, scheme 2,
+//! 2026-11-23, with `integrate_pair` on the same host): Quad4-Quad4 27 us per pair (5.5 times
+//! `integrate_pair`), Quad9-Quad9 0.62 ms (7.4 times); 36 us and 0.90 ms with the full product
+//! and the buffers cleared per sub-segment pair.
 //!
 //! # Tests
 //!
@@ -1098,8 +1099,8 @@ impl PointValues {
 /// - `d(w Phi_k N_b)/dx_s = Phi_k N_b dw/dx_s`: the first block of the coefficients times
 ///   `dweight_dx` (`points x 3 ns`).
 ///
-/// The first pallet of a sub-segment pair overwrites `plane` and `face`, the others add to them,
-/// so nothing is cleared between sub-segment pairs but the values.
+/// The first pallet of a sub-segment pair overwrites rows `0..rows` of `plane` and `face`, the
+/// others add to them, so only the values and counts are reset between sub-segment pairs.
 struct SubPairTangent {
     ns: usize,
     np: usize,
@@ -1269,7 +1270,11 @@ impl SubPairTangent {
         let ndof = out.ndof();
         let (rows1, rows) = self.rows();
         if self.pallets_added == 0 {
-            // No pallet: zero weights and derivatives.
+            // No pallet: zero weights and derivatives (`0 dP/dy`, not finite where `dP/dy` is
+            // not, as the full product would be).
+            if !chain.as_slice().iter().all(|v| v.is_finite()) {
+                return SubPairOutcome::Failed(PairFailure::NonFinite);
+            }
             out.unresolved_vertices += self.unresolved;
             return SubPairOutcome::Integrated { points: 0 };
         }
