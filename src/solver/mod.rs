@@ -452,7 +452,16 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                     .domain_error
                     .clone()
                     .unwrap_or_else(|| outcome.reason.to_string());
-                let limit = cut_limit(cuts_in_row, scene.max_cuts, dt, dt_min);
+                // Which limit, if any, stops the step from being cut again, in words.
+                let limit =
+                    cut_limit(cuts_in_row, scene.max_cuts, dt, dt_min).map(|limit| match limit {
+                        CutLimit::CutsInRow => format!("no cuts left ({} allowed)", scene.max_cuts),
+                        CutLimit::SmallestStep => format!(
+                            "the step ({dt:.3e} of the load) is the smallest allowed \
+                             (steps.max_cuts = {})",
+                            scene.max_cuts
+                        ),
+                    });
                 let giving_up = limit.is_some();
                 // `steps.on_failure = "continue"`: with no cut left, a state Newton reached
                 // inside the domain is the step's (unconverged) result.
@@ -468,28 +477,16 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
                     model.tying.set_multipliers(&multipliers);
                     model.contact.restore(&contact_saved);
                     let load_new = Load(t_new);
-                    let limit = match limit {
-                        Some(CutLimit::CutsInRow) => {
-                            format!("no cuts left ({} allowed)", scene.max_cuts)
-                        }
-                        Some(CutLimit::SmallestStep) => format!(
-                            "the step ({dt:.3e} of the load) is the smallest allowed \
-                             (steps.max_cuts = {})",
-                            scene.max_cuts
-                        ),
-                        None => String::new(),
-                    };
                     say(format!(
                         "  step {} load {load_new:.6}: not converged ({why}) after {} Newton its; {}",
                         step + 1,
                         outcome.iterations,
-                        if giving_up {
-                            limit.clone()
-                        } else {
-                            format!("cut {cuts_in_row}/{}", scene.max_cuts)
+                        match &limit {
+                            Some(limit) => limit.clone(),
+                            None => format!("cut {cuts_in_row}/{}", scene.max_cuts),
                         }
                     ));
-                    if giving_up {
+                    if let Some(limit) = limit {
                         summary.message = Some(format!(
                             "step {} (load {}) did not converge after {} cut(s), {limit}: {why}",
                             step + 1,
