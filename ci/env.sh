@@ -1,4 +1,4 @@
-# Sourced by the ci/ scripts: MPI settings every mpirun here needs (see shared/design/STACK.md).
+# Sourced by the ci/ scripts: MPI settings every mpirun here needs (see docs/guide.md, "System set-up").
 export OMPI_ALLOW_RUN_AS_ROOT=1
 export OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 # Without this, concurrent 2-rank jobs busy-wait and take 40x longer.

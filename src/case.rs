@@ -218,7 +218,7 @@ pub struct Interface {
 /// The exact solution a run is measured against.
 #[derive(Clone, Debug)]
 pub enum Verification {
-    /// Lamé's thick sphere under inner pressure (ALGORITHM.md section 9).
+    /// Lamé's thick sphere under inner pressure (docs/theory.md section 9).
     LameSphere {
         inner_radius: f64,
         outer_radius: f64,

@@ -28,6 +28,9 @@ pub mod scaling;
 pub mod solid;
 pub mod solver;
 pub mod study;
+#[cfg(test)]
+mod test_rng;
+pub mod vec3;
 pub mod verify;
 
 pub use error::{Error, Result};

@@ -1,4 +1,4 @@
-//! Verification figures against exact solutions (ALGORITHM.md section 9), and for every scene
+//! Verification figures against exact solutions (docs/theory.md section 9), and for every scene
 //! `max_displacement`, the largest nodal displacement (a value to compare runs by where there
 //! is no exact solution).
 //!
@@ -33,7 +33,7 @@
 //!
 //! A sphere of radius R pressed on a flat (or two spheres, `1/R = 1/R1 + 1/R2`) by a total
 //! force F along the z axis, both linear elastic, frictionless, small strain (Hertz 1882;
-//! Johnson, *Contact Mechanics*, 1985, section 4.2; ALGORITHM.md section 9):
+//! Johnson, *Contact Mechanics*, 1985, section 4.2; docs/theory.md section 9):
 //!
 //! ```text
 //! 1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2

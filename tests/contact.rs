@@ -1,6 +1,6 @@
 //! Frictional mortar contact (the contact issue), end to end through `mortar run`:
 //!
-//! - the contact patch test (ALGORITHM.md section 9): two stacked Neo-Hookean blocks with
+//! - the contact patch test (docs/theory.md section 9): two stacked Neo-Hookean blocks with
 //!   non-matching meshes under a uniform follower pressure p0. The exact solution is a
 //!   homogeneous finite deformation with Cauchy stress `sigma_zz = -p0` and every contact
 //!   pressure `p_A = p0`; checked for Hex8, Hex20, Hex27 and Tet10, either side secondary,
@@ -434,7 +434,7 @@ fn friction_dissipates_in_every_step() {
 
 /// A pressed, sticking pair turned rigidly through 90 degrees in 10 increments (about the y
 /// axis through the centre of the pair, both outer faces prescribed): the mortar slip of every
-/// pressed node stays below 1e-10 in every step (frame indifference of the slip, ALGORITHM.md
+/// pressed node stays below 1e-10 in every step (frame indifference of the slip, docs/theory.md
 /// section 6), and the total normal contact force keeps its value (to 1e-6 relative).
 #[test]
 fn sticking_pair_rotated_rigidly_does_not_slip() {

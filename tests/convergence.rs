@@ -1,7 +1,7 @@
 //! Convergence rates on Lamé's thick sphere (release mode: `cargo test --release --test
 //! convergence`; in debug builds the tests are ignored, they would take minutes).
 //!
-//! Reference: Lamé's solution for a thick sphere under inner pressure (ALGORITHM.md section 9),
+//! Reference: Lamé's solution for a thick sphere under inner pressure (docs/theory.md section 9),
 //! inner radius 1, outer radius 2, p = 1, E = 1000, nu = 0.3, dead pressure load, symmetry on the
 //! three planes of the octant. Mesh: the cube-sphere octant with n x n elements per patch and n
 //! through the thickness, n = 4, 6, 8 (the element size h ~ 1/n).

@@ -1,6 +1,6 @@
 //! Frictional mortar contact: the Kuhn-Tucker conditions on the normalized weighted gap and
 //! Coulomb's law on the mortar slip, by penalty plus Uzawa augmented Lagrangian, with the
-//! consistent tangent (ALGORITHM.md sections 1, 2, 4, 6 and 7; the paper's eqs. 5-8).
+//! consistent tangent (docs/theory.md sections 1, 2, 4, 6 and 7; the paper's eqs. 5-8).
 //!
 //! # Per traction node A (one pass of one interface)
 //!
@@ -18,7 +18,7 @@
 //! ```
 //!
 //! `x^n` are the positions and `g_A^n` the weighted gap at the last converged step, so
-//! `dsh_A` is the paper's eq. 7 (ALGORITHM.md section 6): the current weights applied to the old
+//! `dsh_A` is the paper's eq. 7 (docs/theory.md section 6): the current weights applied to the old
 //! positions, minus the old weights applied to the old positions. A node without overlap at the
 //! last converged step has no slip history yet: `dsh_A = 0` in its first step of contact. The
 //! reference configuration counts as the first converged state (`commit` at `u = 0`).
@@ -58,7 +58,7 @@
 //! `d s / s = d a_full / a_full - d a / a` enters the tangent below.
 //!
 //! **Nodes sliding off.** A node below [`MIN_COVERAGE`] (0.1 %) carries no traction
-//! (ALGORITHM.md section 10: as a node slides off the edge of the primary surface `a_A -> 0`,
+//! (docs/theory.md section 10: as a node slides off the edge of the primary surface `a_A -> 0`,
 //! and `1 / a_A` in `gh_A` and its derivative would be unbounded). Between 0.1 % and
 //! [`FADE_COVERAGE`] (5 %) the node's traction is multiplied by a smooth step from 0 to 1
 //! ([`coverage_fade`]), so that its force vanishes smoothly, with its derivative, as it slides
@@ -123,7 +123,7 @@
 //! After a converged Newton solve, each node's multipliers are updated (law::uzawa_update);
 //! the violation of a node, relative to `h_A`, is the size of the normal update in gap units,
 //! `|d lambda_N| / eps_N` (the penetration of a pressed node, the multiplier an open node still
-//! holds), and the slip `|dsh_A|` of a sticking node (ALGORITHM.md section 4; a slipping node has
+//! holds), and the slip `|dsh_A|` of a sticking node (docs/theory.md section 4; a slipping node has
 //! no tangential constraint to meet). A node without traction (no overlap, or coverage below
 //! [`MIN_COVERAGE`]) has its multipliers released without counting a violation (they exert
 //! no force whatever their value); a fading node keeps them and counts none. Solves repeat
@@ -195,11 +195,12 @@ use crate::contact::search::{Aabb, PrimaryTree};
 use crate::contact::tying::Augmented;
 use crate::dofs::DofMap;
 use crate::error::Result;
-use crate::fe::shape::{cross_at as cross, normal_from_tangents, tangents_from_grad};
+use crate::fe::shape::{normal_from_tangents, tangents_from_grad};
 use crate::fe::FaceType;
 use crate::mesh::FaceRef;
 use crate::petsc::log::Section;
 use crate::petsc::{Matrix, PetscInt, Sparsity, Vector};
+use crate::vec3::{cross, dot, norm, tangential};
 
 /// A node carries traction only if its overlap integral `a_A` is at least this fraction of its
 /// full integral `a_full_A` (its coverage). It also bounds the coverage scaling of the
@@ -852,7 +853,7 @@ impl ContactInterfaces {
                     }
                     v[9] += nf.area * dot(nf.traction_t, nf.slip);
                     if nf.pressure > 0.0 {
-                        max_slip = max_slip.max(norm(&nf.slip));
+                        max_slip = max_slip.max(norm(nf.slip));
                     }
                 }
             }
@@ -865,7 +866,19 @@ impl ContactInterfaces {
         world.all_reduce_into(&local_max[..], &mut all_max[..], SystemOperation::max());
         all.chunks(10)
             .zip(all_max)
-            .map(|(v, m)| [v[0], norm(&v[1..4]), v[4], v[5], v[6], v[7], v[8], v[9], m])
+            .map(|(v, m)| {
+                [
+                    v[0],
+                    norm([v[1], v[2], v[3]]),
+                    v[4],
+                    v[5],
+                    v[6],
+                    v[7],
+                    v[8],
+                    v[9],
+                    m,
+                ]
+            })
             .collect()
     }
 
@@ -1006,7 +1019,7 @@ impl ContactInterfaces {
                     0.0
                 };
                 let dt = if iface.mu > 0.0 && f.status == 1 {
-                    norm(&f.slip)
+                    norm(f.slip)
                 } else {
                     0.0
                 };
@@ -2266,20 +2279,6 @@ fn global_dofs(dofs: &DofMap, nodes: &[usize]) -> Vec<PetscInt> {
         .iter()
         .flat_map(|&n| dofs.global[3 * n..3 * n + 3].iter().copied())
         .collect()
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn norm(v: &[f64]) -> f64 {
-    v.iter().map(|x| x * x).sum::<f64>().sqrt()
-}
-
-/// The part of `v` tangent to the unit normal `nu`.
-fn tangential(v: [f64; 3], nu: [f64; 3]) -> [f64; 3] {
-    let d = dot(v, nu);
-    std::array::from_fn(|c| v[c] - d * nu[c])
 }
 
 #[cfg(test)]

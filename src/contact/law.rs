@@ -1,5 +1,5 @@
 //! Pointwise enforcement laws of frictional contact at one traction node A: penalty plus Uzawa
-//! augmented Lagrangian, normal and Coulomb (ALGORITHM.md sections 1, 4 and 6; the paper's
+//! augmented Lagrangian, normal and Coulomb (docs/theory.md sections 1, 4 and 6; the paper's
 //! eqs. 5 and 8). Physics only: the gap, slip and normal come from the caller (`contact::mortar`
 //! and the nodal normals); here they are numbers.
 //!
@@ -12,7 +12,7 @@
 //! traction the secondary body exerts on the primary one: `+p nu` pushes the primary away, and
 //! the secondary receives `-p nu`, pushed back out of the primary.
 //!
-//! `dsh` is the normalized mortar slip increment of ALGORITHM.md section 6,
+//! `dsh` is the normalized mortar slip increment of docs/theory.md section 6,
 //! `dsh = P [sum_C dn2_AC x2_C(t_n) - sum_B dn1_AB x1_B(t_n)] / a_A`. For one secondary face
 //! at rest and a primary face translated by `v` (tangent, away from the edges), the primary
 //! point under a secondary point is the material point that was at `x - v`, so

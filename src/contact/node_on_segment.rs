@@ -1,5 +1,5 @@
 //! Node-on-segment contact (Hallquist, Goudreau and Benson 1985): the baseline the paper
-//! compares mortar contact against (ALGORITHM.md section 8). Geometry and the node's forces
+//! compares mortar contact against (docs/theory.md section 8). Geometry and the node's forces
 //! with their exact derivatives; the enforcement laws are those of mortar contact
 //! (`contact::law`), so the two methods differ only in how gap and slip are measured.
 //!
@@ -40,8 +40,9 @@ use crate::contact::law::{
     carries_friction, friction_traction, normal_pressure_touching, touching_friction,
     FrictionResult, LawParams, NodeHistory,
 };
-use crate::fe::shape::{face_normal_at, face_point_at, face_tangents_at, Scalar};
+use crate::fe::shape::{face_normal_at, face_point_at, face_tangents_at};
 use crate::fe::FaceType;
+use crate::vec3::dot;
 
 /// Dual numbers over the node and at most 9 segment nodes (3 coordinates each).
 const SLOTS: usize = 30;
@@ -141,13 +142,9 @@ fn residual_and_hessian(seg: &Segment, p: [f64; 3], xi: [f64; 2]) -> ([f64; 2], 
     let q = face_point_at(seg.kind, &x, xd);
     let (t1, t2) = face_tangents_at(seg.kind, &x, xd);
     let diff: [DXi; 3] = std::array::from_fn(|d| q[d] - p[d]);
-    let r = [dot_d(&diff, &t1), dot_d(&diff, &t2)];
+    let r = [dot(diff, t1), dot(diff, t2)];
     let grad = |v: &DXi| -> [f64; 2] { v.eps.0.as_ref().map_or([0.0; 2], |m| m.data.0[0]) };
     ([r[0].re, r[1].re], [grad(&r[0]), grad(&r[1])])
-}
-
-fn dot_d<T: Scalar>(a: &[T; 3], b: &[T; 3]) -> T {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 /// `H^-1 r` for a 2x2 `H`, `None` when singular.
@@ -243,7 +240,7 @@ pub fn node_contribution(
     }
     let nu: [D; 3] = n.map(|v| -v);
     let diff: [D; 3] = std::array::from_fn(|d| xa[d] - q[d]);
-    let gh = dot_d(&nu, &diff);
+    let gh = dot(nu, diff);
     let mut shape = vec![D::from_re(0.0); np];
     geo.segment.kind.shape_at(xi, &mut shape);
 
@@ -306,7 +303,7 @@ fn dual_closest_point(geo: &NodeGeometry, xa: &[D; 3], xs: &[[D; 3]]) -> [D; 2] 
     let q = face_point_at(geo.segment.kind, xs, fixed);
     let (t1, t2) = face_tangents_at(geo.segment.kind, xs, fixed);
     let diff: [D; 3] = std::array::from_fn(|d| q[d] - xa[d]);
-    let r = [dot_d(&diff, &t1), dot_d(&diff, &t2)];
+    let r = [dot(diff, t1), dot(diff, t2)];
     let det = h[0][0] * h[1][1] - h[0][1] * h[1][0];
     if det == 0.0 || !det.is_finite() {
         return fixed;

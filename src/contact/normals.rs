@@ -1,5 +1,5 @@
 //! Averaged nodal normals `nu_A` of a contact surface and their exact linearization
-//! (ALGORITHM.md section 2).
+//! (docs/theory.md section 2).
 //!
 //! # Definition
 //!
@@ -22,7 +22,7 @@
 //!
 //! The orientation follows the faces: for outward-ordered faces of the secondary body, `nu_A` is
 //! the outward normal of that body, i.e. it points from the secondary toward the primary body as
-//! ALGORITHM.md section 1 requires.
+//! docs/theory.md section 1 requires.
 //!
 //! # Linearization
 //!
@@ -63,6 +63,7 @@
 use std::sync::OnceLock;
 
 use crate::fe::FaceType;
+use crate::vec3::{cross, norm};
 
 /// A face of the surface: its type and global node ids (face order).
 #[derive(Clone, Copy, Debug)]
@@ -110,18 +111,6 @@ fn type_index(ft: FaceType) -> usize {
         FaceType::Tri3 => 3,
         FaceType::Tri6 => 4,
     }
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn norm(a: [f64; 3]) -> f64 {
-    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
 }
 
 /// `[v]_x`, the matrix of `w -> v x w`.
@@ -447,18 +436,7 @@ impl NodalNormals {
 mod tests {
     use super::*;
 
-    /// Small deterministic xorshift generator.
-    struct Rng(u64);
-
-    impl Rng {
-        /// Uniform in [-1, 1).
-        fn sym(&mut self) -> f64 {
-            self.0 ^= self.0 << 13;
-            self.0 ^= self.0 >> 7;
-            self.0 ^= self.0 << 17;
-            2.0 * ((self.0 >> 11) as f64 / (1u64 << 53) as f64) - 1.0
-        }
-    }
+    use crate::test_rng::Rng;
 
     /// A structured surface: `nc x nc` cells on a lattice of `(2 nc + 1)^2` points (mid-edge and
     /// centre points are used by the quadratic faces only), mapped from parameters `(u, v)` in

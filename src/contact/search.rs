@@ -1,6 +1,6 @@
 //! Rough search: candidate segment pairs from bounding boxes.
 //!
-//! Step 1 of the segment-to-segment integration (ALGORITHM.md section 3.1): before any secondary
+//! Step 1 of the segment-to-segment integration (docs/theory.md section 3.1): before any secondary
 //! segment is integrated against a primary segment, the pairs that can possibly overlap are found
 //! from axis-aligned bounding boxes.
 //!

@@ -1,5 +1,5 @@
 //! Mesh tying of dissimilar meshes: the vector weighted-gap constraint, by penalty plus Uzawa
-//! augmented Lagrangian (ALGORITHM.md sections 1, 4 and 8).
+//! augmented Lagrangian (docs/theory.md sections 1, 4 and 8).
 //!
 //! # The constraint
 //!
@@ -70,6 +70,7 @@ use crate::dofs::DofMap;
 use crate::error::Result;
 use crate::mesh::FaceRef;
 use crate::petsc::{Matrix, PetscInt, Sparsity, Vector};
+use crate::vec3::norm;
 
 /// One constraint row: traction node A and its terms.
 #[derive(Clone, Debug)]
@@ -409,10 +410,6 @@ impl TiedInterfaces {
     }
 }
 
-fn norm(v: [f64; 3]) -> f64 {
-    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
-}
-
 /// An interface whose secondary side meets no primary face is an error; one covered by less
 /// than 90 % of its area draws a warning (rank 0): tied faces are meant to lie on each other.
 fn check_coverage(
@@ -595,7 +592,7 @@ fn build_rows(scene: &Scene, iface: &Interface, triplets: &[Triplet]) -> Vec<Row
         .filter_map(|(a, terms)| {
             let area = area.get(&a).copied().unwrap_or(0.0);
             // A node whose traction function barely meets the other side (a_A -> 0) would get
-            // an unbounded eps_A / a_A: such rows are dropped (ALGORITHM.md section 10).
+            // an unbounded eps_A / a_A: such rows are dropped (docs/theory.md section 10).
             if area <= 1e-12 * max_area {
                 return None;
             }

@@ -476,15 +476,6 @@ impl FaceType {
     }
 }
 
-/// `a x b` for any [`Scalar`].
-pub fn cross_at<T: Scalar>(a: [T; 3], b: [T; 3]) -> [T; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
 /// Position `x(xi) = sum_a N_a(xi) x_a` on a face, for any [`Scalar`] (dual node coordinates
 /// and/or a dual `xi`).
 ///
@@ -568,7 +559,7 @@ pub fn face_normal_at<T: Scalar>(ft: FaceType, x: &[[T; 3]], xi: [T; 2]) -> ([T;
 
 /// The unit normal and surface Jacobian of [`face_normal_at`] from the tangent vectors.
 pub fn normal_from_tangents<T: Scalar>(t1: [T; 3], t2: [T; 3]) -> ([T; 3], T) {
-    let c = cross_at(t1, t2);
+    let c = crate::vec3::cross(t1, t2);
     let jac = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
     if jac.re() > 0.0 {
         (c.map(|v| v / jac), jac)
@@ -581,30 +572,7 @@ pub fn normal_from_tangents<T: Scalar>(t1: [T; 3], t2: [T; 3]) -> ([T; 3], T) {
 mod tests {
     use super::*;
 
-    /// Small deterministic xorshift generator, enough for test points.
-    struct Rng(u64);
-
-    impl Rng {
-        fn uniform(&mut self) -> f64 {
-            self.0 ^= self.0 << 13;
-            self.0 ^= self.0 >> 7;
-            self.0 ^= self.0 << 17;
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64
-        }
-
-        /// A point of the parent domain of `hex`-like (`[-1, 1]^D`) or simplex shape.
-        fn point<const D: usize>(&mut self, cube: bool) -> [f64; D] {
-            loop {
-                let p: [f64; D] = std::array::from_fn(|_| self.uniform());
-                if cube {
-                    return p.map(|t| 2.0 * t - 1.0);
-                }
-                if p.iter().sum::<f64>() <= 1.0 {
-                    return p;
-                }
-            }
-        }
-    }
+    use crate::test_rng::Rng;
 
     const NUM_POINTS: usize = 50;
 
@@ -957,7 +925,7 @@ mod tests {
         let s = 1.0 / 3f64.sqrt();
         let e1 = [1.0 / 2f64.sqrt(), -1.0 / 2f64.sqrt(), 0.0];
         let e2 = [1.0 / 6f64.sqrt(), 1.0 / 6f64.sqrt(), -2.0 / 6f64.sqrt()];
-        let normal = cross_at(e1, e2);
+        let normal = crate::vec3::cross(e1, e2);
         assert_vec_close(normal, [s, s, s], 1e-15, "plane basis");
         let origin = [0.3, -1.2, 2.5];
         let quad = [[0.0, 0.0], [2.0, 0.1], [2.5, 1.7], [-0.4, 1.2]];

@@ -336,7 +336,7 @@ pub struct InterfaceSpec {
     /// 16 points for degrees 4, 5, 6 and 8; `fe::quadrature`), collapsed Gauss above.
     pub quadrature_degree: Option<usize>,
     /// How the overlap of two faces is split into integration pallets: `"centroid"` (default,
-    /// ALGORITHM.md 3.5): one triangle per edge of the overlap polygon from its area centroid,
+    /// docs/theory.md 3.5): one triangle per edge of the overlap polygon from its area centroid,
     /// a split that moves continuously with the faces. `"fan"`: two triangles fewer, a fan from
     /// one vertex of the polygon (chosen by where the vertices come from, not by position);
     /// the same integral where the rule is exact (affine face pairs, the patch tests) at about

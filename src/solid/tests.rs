@@ -13,18 +13,7 @@ const NEO: Material = Material::NeoHookean {
     poisson: 0.3,
 };
 
-/// Small deterministic xorshift generator.
-struct Rng(u64);
-
-impl Rng {
-    /// Uniform in [-1, 1].
-    fn sym(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-    }
-}
+use crate::test_rng::Rng;
 
 /// A smooth nonlinear map of the parent domain (curves the edges of quadratic elements) with
 /// positive Jacobian everywhere on it.

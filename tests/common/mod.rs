@@ -72,7 +72,7 @@ pub fn mortar_command() -> Command {
     c
 }
 
-/// The MPI environment every run needs here (see shared/design/STACK.md).
+/// The MPI environment every run needs here (see docs/guide.md, "System set-up").
 pub fn mpi_env(cmd: &mut Command) -> &mut Command {
     cmd.env("OMPI_ALLOW_RUN_AS_ROOT", "1")
         .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")

@@ -1,4 +1,4 @@
-//! Convex polygon clipping in the projection plane (ALGORITHM.md sections 3.4 and 3.5).
+//! Convex polygon clipping in the projection plane (docs/theory.md sections 3.4 and 3.5).
 //!
 //! # Clipping
 //!
@@ -21,7 +21,7 @@
 //! All tolerances are relative to `scale`, the size of the segment being integrated:
 //! `tol = 1e-13 scale`. The result is counter-clockwise. It is [`Clipped::Empty`] if fewer than
 //! three vertices remain (disjoint polygons, or polygons touching along an edge or at a corner),
-//! and [`Clipped::Sliver`] if its area is below `1e-8 scale^2` (ALGORITHM.md 3.4): the overlap is
+//! and [`Clipped::Sliver`] if its area is below `1e-8 scale^2` (docs/theory.md 3.4): the overlap is
 //! too thin to integrate meaningfully and the caller counts it.
 //!
 //! Each dropped point or inside-by-tolerance decision changes the area by at most about
@@ -45,7 +45,7 @@
 //! [`pallets`] splits a convex polygon of `N` vertices into the triangles the quadrature rule
 //! runs on, each the triangle of one polygon edge with an apex ([`PalletSplit`]):
 //!
-//! - [`PalletSplit::Centroid`] (the default, ALGORITHM.md 3.5): `N` triangles from the area
+//! - [`PalletSplit::Centroid`] (the default, docs/theory.md 3.5): `N` triangles from the area
 //!   centroid, one per edge (also for a triangle). The split depends continuously on the
 //!   vertices, unlike a diagonal or Delaunay split whose choice flips with round-off on
 //!   cocircular polygons: when a vertex appears or disappears, its pallet appears or disappears

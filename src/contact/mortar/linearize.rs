@@ -1,5 +1,5 @@
 //! The mortar weights of one face pair **with their exact derivatives** with respect to the node
-//! coordinates of both faces: the consistent tangent of the contact kernel (ALGORITHM.md
+//! coordinates of both faces: the consistent tangent of the contact kernel (docs/theory.md
 //! section 7).
 //!
 //! [`integrate_pair_linearized`] returns the weights `n1_kb`, `n2_kc` of
@@ -152,8 +152,9 @@ use super::pair::{
 use super::segments::{
     sub_segments, traction_node_count, traction_shape_on_at, SubSegment, TractionScheme,
 };
-use crate::fe::shape::{cross_at, TensorShape};
+use crate::fe::shape::TensorShape;
 use crate::fe::{FaceType, Rule2};
+use crate::vec3::cross;
 
 /// Mortar weights of one face pair, dense, with their derivatives.
 ///
@@ -622,8 +623,8 @@ fn face_jacobian(
             }
         }
     }
-    let c = cross_at(t[0], t[1]);
-    // d(a b - e f) = (da b + db a) - (de f + df e), as in cross_at.
+    let c = cross(t[0], t[1]);
+    // d(a b - e f) = (da b + db a) - (de f + df e), as in vec3::cross.
     let product_difference = |(a, b): (usize, usize), (e, f): (usize, usize), j: usize| {
         (dt[0][a][j] * t[1][b] + dt[1][b][j] * t[0][a])
             - (dt[0][e][j] * t[1][f] + dt[1][f][j] * t[0][e])
@@ -644,7 +645,7 @@ fn face_jacobian(
     if jacobian > 0.0 {
         // dJ = (t2 x n) . dt1 + (n x t1) . dt2, dt_i = sum_a N_a,i dx_a.
         let n = c.map(|v| v / jacobian);
-        let (h1, h2) = (cross_at(t[1], n), cross_at(n, t[0]));
+        let (h1, h2) = (cross(t[1], n), cross(n, t[0]));
         for (a, shape) in shapes.iter().enumerate() {
             let g = shape.gradient;
             for d in 0..3 {
@@ -1340,22 +1341,7 @@ mod tests {
 
     type Vec3 = [f64; 3];
 
-    /// Small deterministic xorshift generator.
-    struct Rng(u64);
-
-    impl Rng {
-        fn uniform(&mut self) -> f64 {
-            self.0 ^= self.0 << 13;
-            self.0 ^= self.0 >> 7;
-            self.0 ^= self.0 << 17;
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64
-        }
-
-        /// Uniform in `[-amplitude, amplitude]`.
-        fn symmetric(&mut self, amplitude: f64) -> f64 {
-            amplitude * (2.0 * self.uniform() - 1.0)
-        }
-    }
+    use crate::test_rng::Rng;
 
     /// Parent coordinates mapped to `[0, 1]^2` (quads) or kept (the unit triangle).
     fn unit_coords(kind: FaceType, xi: [f64; 2]) -> [f64; 2] {
@@ -1377,7 +1363,7 @@ mod tests {
         let norm = 14f64.sqrt();
         let k = [1.0 / norm, 2.0 / norm, 3.0 / norm];
         let (s, c) = 0.7f64.sin_cos();
-        let kxp = cross_at(k, p);
+        let kxp = cross(k, p);
         let kp = k[0] * p[0] + k[1] * p[1] + k[2] * p[2];
         let shift = [0.3, -0.2, 0.5];
         std::array::from_fn(|d| p[d] * c + kxp[d] * s + k[d] * kp * (1.0 - c) + shift[d])
@@ -1926,7 +1912,7 @@ mod tests {
                             .iter()
                             .enumerate()
                             .map(|(a, x)| {
-                                let v = cross_at(omega, *x);
+                                let v = cross(omega, *x);
                                 (0..3).map(|d| v[d] * row[3 * a + d]).sum::<f64>()
                             })
                             .sum();

@@ -1,4 +1,4 @@
-//! Integration of one secondary face against one primary face (ALGORITHM.md section 3).
+//! Integration of one secondary face against one primary face (docs/theory.md section 3).
 //!
 //! [`integrate_pair`] computes the mortar weights
 //!
@@ -15,7 +15,7 @@
 //! 1. **Plane.** Through the centre `x_c = x(xi_c)` of `s` (the face map at the sub-segment's
 //!    centroid in parent coordinates) with normal `n_c`, the secondary face's unit geometric normal
 //!    at `xi_c` ([`face_normal`]). This is a choice: the paper uses the interpolated nodal normal;
-//!    nodal normals belong to the contact enforcement (ALGORITHM.md section 2), while the geometry
+//!    nodal normals belong to the contact enforcement (docs/theory.md section 2), while the geometry
 //!    of the overlap only needs a plane that the sub-segment projects onto without folding, and
 //!    the face's own normal depends on that face alone. In-plane basis: `e1` along the first edge
 //!    of `s` (projected), `e2 = n_c x e1`, so the 2D coordinates are the same for any rigid motion
@@ -57,7 +57,7 @@
 //!    plane's area element.
 //! 6. **Accumulate** `n1[k][b] += dgamma Phi_k N1_b` and `n2[k][c] += dgamma Phi_k N2_c` at the
 //!    same points with the same weights, so that `sum_b n1_kb = sum_c n2_kc = int Phi_k` (up to
-//!    round-off): linear momentum is conserved exactly (ALGORITHM.md 3.7).
+//!    round-off): linear momentum is conserved exactly (docs/theory.md 3.7).
 //!
 //! A sub-segment pair is accumulated only if every one of its points was mapped and evaluated to
 //! finite values; otherwise it is skipped whole and counted ([`RejectStats::inverse_map_failed`]
@@ -77,7 +77,7 @@
 //! Every counter of [`RejectStats`] counts **sub-segment pairs** (a Quad9 against a Quad9 is 16
 //! of them), except [`RejectStats::non_finite`], which counts face pairs with a non-finite node
 //! coordinate plus sub-segment pairs with a non-finite intermediate value. Rejections are never
-//! fatal here; a caller should stop the step on `non_finite > 0` (ALGORITHM.md section 10).
+//! fatal here; a caller should stop the step on `non_finite > 0` (docs/theory.md section 10).
 //!
 //! # Quadrature degree
 //!
@@ -95,9 +95,10 @@ use super::segments::{
     sub_segments, traction_node_count, traction_shape_on, SubSegment, TractionScheme,
 };
 use crate::fe::shape::{
-    cross_at, face_normal_at, face_point_at, normal_from_tangents, tangents_from_grad, Scalar,
+    face_normal_at, face_point_at, normal_from_tangents, tangents_from_grad, Scalar,
 };
 use crate::fe::{face_normal, FaceType};
+use crate::vec3::{cross, dot, normalized, sub, Vec3};
 
 /// A primary sub-segment is integrated only if its normal `n_m` satisfies
 /// `n_m . n_c <= -OPPOSED_NORMALS_COSINE` (the normals are more than about 84 degrees apart).
@@ -232,26 +233,6 @@ impl RejectStats {
     }
 }
 
-pub(super) type Vec3<T = f64> = [T; 3];
-
-pub(super) fn dot<T: Scalar>(a: Vec3<T>, b: Vec3<T>) -> T {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross<T: Scalar>(a: Vec3<T>, b: Vec3<T>) -> Vec3<T> {
-    cross_at(a, b)
-}
-
-fn minus<T: Scalar>(a: Vec3<T>, b: Vec3<T>) -> Vec3<T> {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-/// `a / |a|`, if `|a|` (its real part) is positive and finite.
-fn normalized<T: Scalar>(a: Vec3<T>) -> Option<Vec3<T>> {
-    let n = dot(a, a).sqrt();
-    (n.re() > 0.0 && n.re().is_finite()).then(|| a.map(|v| v / n))
-}
-
 /// True if the node coordinates of a face are all finite.
 pub(super) fn is_finite_face(face: &FaceGeom) -> bool {
     face.x.iter().flatten().all(|v| v.is_finite())
@@ -291,9 +272,9 @@ impl<T: Scalar> Plane<T> {
     fn first_axis(x: &[Vec3<T>], seg: &SubSegment, normal: Vec3<T>) -> Option<Vec3<T>> {
         let in_plane = |d: Vec3<T>| {
             let along = dot(d, normal);
-            normalized(minus(d, normal.map(|v| v * along)))
+            normalized(sub(d, normal.map(|v| v * along)))
         };
-        let edge = minus(x[seg.local_nodes[1]], x[seg.local_nodes[0]]);
+        let edge = sub(x[seg.local_nodes[1]], x[seg.local_nodes[0]]);
         let axis = (0..3)
             .min_by(|&i, &j| normal[i].re().abs().total_cmp(&normal[j].re().abs()))
             .map(|i| std::array::from_fn(|d| T::from(if d == i { 1.0 } else { 0.0 })))?;
@@ -302,7 +283,7 @@ impl<T: Scalar> Plane<T> {
 
     /// In-plane coordinates of the projection of `x`.
     pub(super) fn project(&self, x: Vec3<T>) -> [T; 2] {
-        let d = minus(x, self.origin);
+        let d = sub(x, self.origin);
         [dot(d, self.e1), dot(d, self.e2)]
     }
 }

@@ -28,7 +28,7 @@
 //! face's parent coordinates is affine and inverted in closed form ([`SubSegment::to_local`]).
 //! Sub-segment local coordinates are those of Tri3 (unit triangle) and Quad4 (`[-1, 1]^2`).
 //!
-//! # Traction interpolation (ALGORITHM.md section 5)
+//! # Traction interpolation (docs/theory.md section 5)
 //!
 //! The pressure and tangential traction of the secondary face are interpolated with functions
 //! `Phi_A` of its traction nodes `A`:

@@ -147,13 +147,13 @@ fn face_jacobian(
             }
         }
     }
-    let c = cross_at(t[0], t[1]);
+    let c = cross(t[0], t[1]);
     let jacobian = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
     dj_dx.fill(0.0);
     if jacobian.re > 0.0 {
         let n = c.map(|v| v.re / jacobian.re);
         let [t1, t2] = t.map(|ti| ti.map(|v| v.re));
-        let (h1, h2) = (cross_at(t2, n), cross_at(n, t1));
+        let (h1, h2) = (cross(t2, n), cross(n, t1));
         for (a, g) in dn.iter().enumerate() {
             for d in 0..3 {
                 dj_dx[3 * a + d] = h1[d] * g[0].re + h2[d] * g[1].re;
