@@ -7,6 +7,8 @@
 //! - [`fe`]: element topology, shape functions, quadrature.
 //! - [`material`]: constitutive laws (physics only).
 //! - [`solid`]: element residuals and tangents of the bulk, surface loads.
+//! - [`model`]: the contributions of the discrete model (bulk, tying, contact) and what they hand
+//!   the solver.
 //! - [`dofs`]: ownership, PETSc numbering, ghosts and sparsity.
 //! - [`solver`]: load stepping, Newton through SNES, step cutting.
 //! - [`io`]: case files, Gmsh import, VTU/PVD output, CSV history, summary.
@@ -23,6 +25,7 @@ pub mod interrupt;
 pub mod io;
 pub mod material;
 pub mod mesh;
+pub mod model;
 pub mod petsc;
 pub mod scaling;
 pub mod solid;

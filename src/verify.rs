@@ -27,7 +27,7 @@
 //! A uniform Cauchy stress `sigma` everywhere: `max_rel_stress_error` is the largest
 //! `|sigma_h - sigma|` at any quadrature point relative to `|sigma|` (Frobenius). The contact
 //! figures (every nodal pressure equal to p0, the contact forces summing to zero) come from the
-//! contact interfaces (`solver::results`).
+//! contact interfaces (`contact::frictional`, its metrics).
 //!
 //! # Hertz
 //!
@@ -88,8 +88,8 @@
 use nalgebra::{Matrix3, Vector3};
 
 use crate::case::{Scene, Verification};
+use crate::solid::gather_nodes;
 use crate::solid::{for_each_point, ElementGeometry};
-use crate::solver::bulk::gather_nodes;
 
 /// Partial sums of one rank; reduced over ranks by the caller (sums added, maxima maxed).
 #[derive(Clone, Debug, Default)]
@@ -201,7 +201,7 @@ pub fn local_figures(
             }
             out.maxima.push(("rel_stress_error", ds));
         }
-        // Measured on the contact interface (solver::results).
+        // Measured on the contact interface (contact::frictional, its metrics).
         Verification::Hertz { .. } => {}
     }
     out

@@ -6,7 +6,7 @@
 //! block (several times the number of nonzeros), and on more than one rank ship every
 //! off-rank entry through its stash. [`BlockSum`] adds the blocks into one sparse row of
 //! `3 x 3` blocks per node (columns sorted by node, merged with the block's sorted slots), and
-//! [`BlockSum::add_to`] then hands PETSc each node row once, with every column it holds.
+//! [`BlockSum::hand_out`] then hands the solver each node row once, with every column it holds.
 //!
 //! The sums are taken in the order the blocks arrive, entry by entry. Which blocks a rank sums
 //! before PETSc adds them up depends on the number of ranks, so results differ between rank
@@ -14,9 +14,8 @@
 
 use std::collections::HashMap;
 
-use crate::dofs::DofMap;
 use crate::error::Result;
-use crate::petsc::{Matrix, PetscInt};
+use crate::model::TangentSink;
 
 /// One node row: `(column node, 3 x 3 block row-major)`, sorted by column node.
 type NodeRow = Vec<(usize, [f64; 9])>;
@@ -69,34 +68,24 @@ impl BlockSum {
         }
     }
 
-    /// Adds the sum into `jac` (not assembled), one node row at a time: straight into the
-    /// stored rows this rank owns (`petsc::OwnedRows`), through PETSc's stash for the others;
-    /// constrained dofs (global index -1) are left out.
-    pub fn add_to(&self, dofs: &DofMap, jac: &mut Matrix) -> Result<()> {
-        let mut cols: Vec<PetscInt> = Vec::new();
+    /// Hands the sum to `out` one node row at a time: the node's three rows over every column
+    /// node it holds (`3 x 3 columns`, row-major).
+    pub fn hand_out(&self, out: &mut dyn TangentSink) -> Result<()> {
+        let mut cols: Vec<usize> = Vec::new();
         let mut vals: Vec<f64> = Vec::new();
-        jac.with_owned_rows(|owned| {
-            for (node, row) in &self.rows {
-                let rows = &dofs.global[3 * node..3 * node + 3];
-                if rows.iter().all(|&g| g < 0) {
-                    continue;
-                }
-                cols.clear();
-                cols.extend(
+        for (node, row) in &self.rows {
+            cols.clear();
+            cols.extend(row.iter().map(|(c, _)| *c));
+            vals.clear();
+            for i in 0..3 {
+                vals.extend(
                     row.iter()
-                        .flat_map(|(c, _)| dofs.global[3 * c..3 * c + 3].iter().copied()),
+                        .flat_map(|(_, b)| b[3 * i..3 * i + 3].iter().copied()),
                 );
-                vals.clear();
-                for i in 0..3 {
-                    vals.extend(
-                        row.iter()
-                            .flat_map(|(_, b)| b[3 * i..3 * i + 3].iter().copied()),
-                    );
-                }
-                owned.add(rows, &cols, &vals)?;
             }
-            Ok(())
-        })
+            out.add_block(&[*node], &cols, &vals)?;
+        }
+        Ok(())
     }
 
     /// The summed `3 x 3` block of rows of `row` and columns of `col` (zero if none).

@@ -53,12 +53,14 @@
 //! The external force enters the residual with the opposite sign of the internal force
 //! (`R = f_int - f_ext`), so the solver subtracts this tangent.
 
+mod bulk;
 mod kernel;
 mod loads;
 
 #[cfg(test)]
 mod tests;
 
+pub use bulk::{gather_nodes, Bulk};
 pub use kernel::{
     element_stress, for_each_point, internal_force, ElementGeometry, InvertedElement, MAX_NODES,
 };

@@ -34,6 +34,10 @@
 //! nodes (`N_i(xi')` fixed); the law's derivatives come from `contact::law` and are chained
 //! by hand.
 
+mod pass;
+
+pub use pass::{NTS_MARGIN, NTS_PATTERN_MARGIN};
+
 use num_dual::DualSVec64;
 
 use crate::contact::law::{

@@ -1,0 +1,415 @@
+//! Unit tests of the contact interfaces: Uzawa on partly covered nodes, the pressed faces of
+//! a tangent, the coverage fade, the traction integrals, and the dealing of work to ranks.
+
+use super::coverage::traction_integrals;
+use super::deal::{deal_in_strips, pass_ranks};
+use super::evaluate::Linearize;
+use super::{coverage_fade, ContactInterfaces, FADE_COVERAGE, MIN_COVERAGE};
+use crate::case::Scene;
+use crate::contact::mortar::RejectStats;
+use crate::contact::mortar::TractionScheme;
+use crate::dofs::DofMap;
+use crate::fe::FaceType;
+use crate::model::State;
+use std::collections::BTreeSet;
+
+/// Two Hex8 blocks: the top of the lower one (4 x 4 faces, nodes every 0.25, the secondary
+/// side) covered by the upper one from x = 0.45 and y = 0.245 on, 0.01 deep. With bilinear
+/// traction functions a node's coverage is the product of its coverages along x and y:
+/// along x, the column at 0 has no overlap, the column at 0.25 is 2 % covered, the one at
+/// 0.5 68 %, the others wholly; along y, the row at 0 is 0.04 % covered (below
+/// [`MIN_COVERAGE`]), the row at 0.25 52 %, the others wholly.
+fn partly_covered_blocks() -> Scene {
+    scene_of(PARTLY_COVERED)
+}
+
+/// The case text of [`partly_covered_blocks`].
+pub(crate) const PARTLY_COVERED: &str = r#"
+name = "partly_covered"
+[[mesh]]
+body = "low"
+generator = "box"
+element = "hex8"
+divisions = [4, 4, 1]
+lo = [0.0, 0.0, 0.0]
+hi = [1.0, 1.0, 0.5]
+[[mesh]]
+body = "up"
+generator = "box"
+element = "hex8"
+divisions = [2, 2, 1]
+lo = [0.45, 0.245, 0.49]
+hi = [1.45, 1.245, 1.0]
+[[material]]
+body = "low"
+model = "neo_hookean"
+young = 1000.0
+poisson = 0.3
+[[material]]
+body = "up"
+model = "neo_hookean"
+young = 1000.0
+poisson = 0.3
+[[symmetry]]
+set = "low.zmin"
+normal = "z"
+[[dirichlet]]
+set = "up.zmax"
+components = ["x", "y", "z"]
+value = [0.0, 0.0, 0.0]
+[[interface]]
+name = "blocks"
+kind = "contact"
+secondary = "low.zmax"
+primary = "up.zmin"
+scheme = 2
+friction = 0.3
+"#;
+
+/// The scene of a case text.
+pub(crate) fn scene_of(case: &str) -> Scene {
+    // One folder per call: the tests run in parallel threads.
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let dir = std::env::temp_dir().join(format!("mortar-covered-{}-{call}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("case.toml");
+    std::fs::write(&path, case).unwrap();
+    let scene = Scene::load(&path).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    scene
+}
+
+/// The Uzawa bookkeeping of partly covered nodes ([`partly_covered_blocks`]), every node
+/// starting with multipliers. One Uzawa update
+/// - releases the multipliers of the nodes without traction (no overlap, or below
+///   [`MIN_COVERAGE`]), without a violation: they exert no force whatever their multipliers;
+/// - leaves the fading nodes out (below [`FADE_COVERAGE`]: no constraint to meet, the
+///   multipliers kept);
+/// - updates every other node, partly covered or not, and counts its penetration as a
+///   violation.
+///
+/// Closing the step (`commit`, without applying the update) then releases the normal
+/// multiplier of the nodes without traction and keeps those of the others.
+#[test]
+fn uzawa_skips_fading_nodes_and_releases_nodes_without_traction() {
+    let scene = partly_covered_blocks();
+    let elements = vec![0; scene.mesh.num_elements()];
+    let dofs = DofMap::new(&scene.mesh, elements, 0, 1, &scene.constrained_mask());
+    let mut contact = ContactInterfaces::new(&scene, &dofs).unwrap();
+    const LAMBDA_N: f64 = 5.0;
+    for st in &mut contact.interfaces[0].passes[0].state {
+        st.history.lambda_n = LAMBDA_N;
+        st.history.lambda_t = [0.5, 0.0, 0.0];
+    }
+    let u = vec![0.0; 3 * scene.mesh.num_nodes()];
+    let at = State {
+        scene: &scene,
+        u: &u,
+        t: 1.0,
+    };
+
+    let fields = contact.local_fields(&at, 0, 0);
+    let updates = contact.uzawa_updates(&at, 0);
+    // Nodes without traction, fading, partly covered, wholly covered.
+    let mut counts = [0; 4];
+    for (a, f) in &fields {
+        let update = updates.iter().find(|(p, b, ..)| *p == 0 && b == a);
+        let coverage = f.area / f.full_area;
+        if f.area == 0.0 {
+            counts[0] += 1;
+            let (_, _, violation, new) = update.expect("a node without traction is released");
+            assert_eq!(*violation, 0.0, "node {a}: a release is no violation");
+            assert_eq!((new.lambda_n, new.lambda_t), (0.0, [0.0; 3]), "node {a}");
+            continue;
+        }
+        if coverage < FADE_COVERAGE {
+            counts[1] += 1;
+            assert!(
+                update.is_none(),
+                "fading node {a} (coverage {coverage}) updated"
+            );
+            continue;
+        }
+        counts[if coverage < 1.0 - 1e-9 { 2 } else { 3 }] += 1;
+        let (_, _, violation, new) = update.expect("a covered node is updated");
+        assert!(f.gap > 0.0, "node {a}: gap {}", f.gap);
+        assert!(*violation > 1.0, "node {a}: violation {violation}");
+        assert!(
+            new.lambda_n > LAMBDA_N,
+            "node {a}: lambda_n {}",
+            new.lambda_n
+        );
+    }
+    // Without traction: the column at x = 0 and the rest of the row at y = 0; fading: the
+    // rest of the column at x = 0.25; partly covered: the rest of the column at x = 0.5 and
+    // of the row at y = 0.25.
+    assert_eq!(counts, [9, 4, 6, 6]);
+
+    contact.close_step(&at);
+    let pass = &contact.interfaces[0].passes[0];
+    for (a, f) in &fields {
+        let history = &pass.state[*a].history;
+        if f.area == 0.0 {
+            assert_eq!(history.lambda_n, 0.0, "node {a} without traction");
+            assert_eq!(
+                history.traction_t_old, [0.0; 3],
+                "node {a} without traction"
+            );
+        } else {
+            assert_eq!(history.lambda_n, LAMBDA_N, "node {a}");
+        }
+    }
+}
+
+/// A tangent linearizes only the pairs of the faces that carry a pressed node
+/// ([`Linearize::PressedFaces`]), and its blocks are bit for bit those of a tangent that
+/// linearizes every face, on each rank of 1 and of 2 (strips of held nodes, faces whose
+/// nodes two ranks hold): [`partly_covered_blocks`]
+/// - tilted: the upper block lifted by `0.06 (x - 0.45)` about y, so that it presses the
+///   lower surface's nodes at x = 0.5 and the fading ones at x = 0.25 (1-2 % covered), and
+///   stands over those at x = 0.75 and 1 (mean weighted gaps -0.008 and -0.018): the faces
+///   between x = 0.75 and 1 overlap the upper block and carry no pressed node, and on one
+///   rank those four are exactly the faces skipped;
+/// - flush: the upper block lifted by 0.01, onto the lower surface, so that the covered
+///   nodes sit in the touching band (no pressure, a tangent: `dp/dgh > 0`).
+///
+/// Checked to fail with every overlapping face linearized, with one face per pressed node,
+/// with "pressed" read as `p > 0` (the touching band left out), and with the fading nodes
+/// left out.
+#[test]
+fn tangent_linearizes_only_the_faces_of_pressed_nodes() {
+    let scene = partly_covered_blocks();
+    let mesh = &scene.mesh;
+    let up = mesh.bodies.iter().position(|b| b == "up").unwrap();
+    let lifted = |lift: &dyn Fn(f64) -> f64| {
+        let mut u = vec![0.0; 3 * mesh.num_nodes()];
+        for e in (0..mesh.num_elements()).filter(|&e| mesh.body[e] == up) {
+            for &n in mesh.element_nodes(e) {
+                u[3 * n + 2] = lift(mesh.coords[n][0]);
+            }
+        }
+        u
+    };
+    let tilted = lifted(&|x| 0.06 * (x - 0.45));
+    let flush = lifted(&|_| 0.01);
+    for (name, u) in [("tilted", &tilted), ("flush", &flush)] {
+        for (rank, ranks) in [(0, 1), (0, 2), (1, 2)] {
+            let elements = vec![0; mesh.num_elements()];
+            let dofs = DofMap::new(mesh, elements, rank, ranks, &scene.constrained_mask());
+            let contact = ContactInterfaces::new(&scene, &dofs).unwrap();
+            let blocks = |linearize| {
+                let mut out: Vec<(Vec<usize>, Vec<u64>, Vec<u64>)> = Vec::new();
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect();
+                let at = State {
+                    scene: &scene,
+                    u,
+                    t: 1.0,
+                };
+                let mut keep = |b: &super::NodeBlock| {
+                    out.push((b.slots.clone(), bits(&b.force), bits(&b.tangent)));
+                    Ok(())
+                };
+                let failure = contact
+                    .assemble_linearizing(&at, true, linearize, &mut keep)
+                    .unwrap();
+                assert_eq!(failure, None, "{name}, rank {rank} of {ranks}");
+                out
+            };
+            let pressed = blocks(Linearize::PressedFaces);
+            let every = blocks(Linearize::EveryFace);
+            let at = format!("{name}, rank {rank} of {ranks}");
+            assert!(pressed.iter().all(|b| !b.2.is_empty()), "{at}");
+            assert_eq!(pressed.len(), every.len(), "{at}: blocks");
+            if let Some(k) = (0..pressed.len()).find(|&k| pressed[k] != every[k]) {
+                panic!("{at}: the block of slots {:?} differs", pressed[k].0);
+            }
+            if ranks == 1 {
+                assert!(!pressed.is_empty(), "{at}: nothing pressed");
+            }
+        }
+    }
+
+    // Tilted, one rank: the faces with an overlap but no pressed node are the four of the
+    // column between x = 0.75 and 1.
+    let elements = vec![0; mesh.num_elements()];
+    let dofs = DofMap::new(mesh, elements, 0, 1, &scene.constrained_mask());
+    let contact = ContactInterfaces::new(&scene, &dofs).unwrap();
+    let x = State {
+        scene: &scene,
+        u: &tilted,
+        t: 1.0,
+    }
+    .positions();
+    let iface = &contact.interfaces[0];
+    let pass = &iface.passes[0];
+    let ctx = iface.context(false, &x, &contact.x_old);
+    let normals = pass.normals(&x).unwrap();
+    let values = pass.values_at(&ctx, None, &mut RejectStats::default());
+    let (_, kinematics) = pass.measured(&ctx, &values);
+    let linearized: BTreeSet<usize> = pass
+        .pressed_faces(&ctx, &normals, &kinematics)
+        .into_iter()
+        .collect();
+    let skipped: BTreeSet<usize> = values
+        .iter()
+        .map(|p| p.s)
+        .filter(|s| !linearized.contains(s))
+        .collect();
+    let column = |s: &usize| {
+        let xs = pass.sec_faces[*s].nodes.iter().map(|&n| mesh.coords[n][0]);
+        xs.fold((f64::MAX, f64::MIN), |(l, h), v| (l.min(v), h.max(v)))
+    };
+    assert_eq!(skipped.len(), 4, "skipped faces {skipped:?}");
+    assert!(skipped.iter().all(|s| column(s) == (0.75, 1.0)));
+}
+
+/// The fade is 0 up to MIN_COVERAGE, 1 from FADE_COVERAGE on, increasing between, with a
+/// continuous derivative that matches central differences (and is 0 at both ends).
+#[test]
+fn coverage_fade_is_a_smooth_step() {
+    assert_eq!(coverage_fade(0.0), (0.0, 0.0));
+    assert_eq!(coverage_fade(MIN_COVERAGE), (0.0, 0.0));
+    assert_eq!(coverage_fade(FADE_COVERAGE), (1.0, 0.0));
+    assert_eq!(coverage_fade(0.7), (1.0, 0.0));
+    let mut last = 0.0;
+    for i in 1..100 {
+        let c = MIN_COVERAGE + (FADE_COVERAGE - MIN_COVERAGE) * i as f64 / 100.0;
+        let (r, dr) = coverage_fade(c);
+        assert!(r > last && r < 1.0, "not increasing at {c}");
+        last = r;
+        let h = 1e-7;
+        let fd = (coverage_fade(c + h).0 - coverage_fade(c - h).0) / (2.0 * h);
+        assert!(
+            (dr - fd).abs() <= 1e-6 * dr.abs().max(1.0),
+            "{c}: {dr} vs {fd}"
+        );
+    }
+}
+
+/// The traction integrals of a face: on a flat square the corner functions integrate to a
+/// quarter of the area each; on a curved, distorted Quad9 face the corner functions sum to
+/// the area, and the gradient matches central differences of the integrals.
+#[test]
+fn traction_integrals_and_their_gradient() {
+    let square = [
+        [0.0, 0.0, 0.0],
+        [2.0, 0.0, 0.0],
+        [2.0, 2.0, 0.0],
+        [0.0, 2.0, 0.0],
+    ];
+    let flat = traction_integrals(
+        FaceType::Quad4,
+        TractionScheme::Corners,
+        &square,
+        false,
+        |_, _| {},
+    );
+    assert!((flat.area - 4.0).abs() < 1e-14);
+    for v in &flat.value {
+        assert!((v - 1.0).abs() < 1e-14, "{v}");
+    }
+    let parent = FaceType::Quad9.node_coords();
+    let x: Vec<[f64; 3]> = parent
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let w = 0.05 * (i as f64 * 1.7).sin();
+            [p[0] + w, p[1] - 0.5 * w, 0.2 * p[0] * p[0] + 0.1 * p[1] + w]
+        })
+        .collect();
+    for scheme in [TractionScheme::Corners, TractionScheme::PiecewiseLinear] {
+        let f = traction_integrals(FaceType::Quad9, scheme, &x, true, |_, _| {});
+        if scheme == TractionScheme::Corners {
+            let sum: f64 = f.value.iter().sum();
+            assert!((sum - f.area).abs() < 1e-13 * f.area, "{sum} vs {}", f.area);
+        }
+        let h = 1e-6;
+        for b in 0..x.len() {
+            for c in 0..3 {
+                let mut xp = x.clone();
+                let mut xm = x.clone();
+                xp[b][c] += h;
+                xm[b][c] -= h;
+                let fp = traction_integrals(FaceType::Quad9, scheme, &xp, false, |_, _| {});
+                let fm = traction_integrals(FaceType::Quad9, scheme, &xm, false, |_, _| {});
+                for k in 0..f.value.len() {
+                    let fd = (fp.value[k] - fm.value[k]) / (2.0 * h);
+                    let g = f.gradient[k * x.len() + b][c];
+                    assert!(
+                        (g - fd).abs() < 1e-7,
+                        "{scheme:?} k {k} node {b}.{c}: {g} vs {fd}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn passes_are_dealt_before_strips() {
+    // Two passes on two ranks: one each, whole.
+    assert_eq!(pass_ranks(0, 2, 2), 0..1);
+    assert_eq!(pass_ranks(1, 2, 2), 1..2);
+    // One pass: every rank shares it.
+    assert_eq!(pass_ranks(0, 1, 2), 0..2);
+    // Two passes on one rank, or on four ranks.
+    assert_eq!(pass_ranks(1, 2, 1), 0..1);
+    assert_eq!(pass_ranks(1, 2, 4), 2..4);
+    // Two passes on three ranks: blocks of 1 and 2.
+    assert_eq!(pass_ranks(0, 2, 3), 0..1);
+    assert_eq!(pass_ranks(1, 2, 3), 1..3);
+}
+
+#[test]
+fn every_node_is_held_by_exactly_one_rank() {
+    let points: Vec<[f64; 3]> = (0..23)
+        .map(|i| [(i % 5) as f64 * 0.3, (i / 5) as f64, 0.5 * (i % 2) as f64])
+        .collect();
+    for ranks in 1..=5 {
+        for passes in 1..=2 {
+            let mut held_by_pass = vec![0usize; passes];
+            for (pass, held) in held_by_pass.iter_mut().enumerate() {
+                let workers = pass_ranks(pass, passes, ranks);
+                assert!(!workers.is_empty() && workers.end <= ranks);
+                let strips = deal_in_strips(&points, workers.len());
+                let mut counts = vec![0usize; workers.len()];
+                for &s in &strips {
+                    counts[s] += 1;
+                }
+                let (lo, hi) = (counts.iter().min(), counts.iter().max());
+                assert!(hi.unwrap() - lo.unwrap() <= 1, "{ranks} ranks: {counts:?}");
+                *held += counts.iter().sum::<usize>();
+            }
+            assert!(held_by_pass.iter().all(|&n| n == points.len()));
+            // Every rank gets a share of some pass.
+            let used: std::collections::BTreeSet<usize> = (0..passes)
+                .flat_map(|p| pass_ranks(p, passes, ranks))
+                .collect();
+            assert_eq!(used.len(), ranks);
+        }
+    }
+    assert!(deal_in_strips(&[], 3).is_empty());
+}
+
+#[test]
+fn strips_split_along_the_longest_side_in_equal_counts() {
+    // A 5 x 3 grid of points, longer along y: two ranks take the lower and upper rows.
+    let points: Vec<[f64; 3]> = (0..15)
+        .map(|i| [(i % 3) as f64, (i / 3) as f64, 1.0])
+        .collect();
+    let owner = deal_in_strips(&points, 2);
+    let counts = [0, 1].map(|r| owner.iter().filter(|&&o| o == r).count());
+    assert_eq!(counts, [8, 7]);
+    for (p, &o) in points.iter().zip(&owner) {
+        match p[1] {
+            y if y < 2.0 => assert_eq!(o, 0),
+            y if y > 2.0 => assert_eq!(o, 1),
+            _ => {}
+        }
+    }
+    // One rank holds everything; more ranks than points leave some empty.
+    assert!(deal_in_strips(&points, 1).iter().all(|&o| o == 0));
+    let many = deal_in_strips(&points[..2], 4);
+    assert_eq!(many, vec![0, 2]);
+}

@@ -1,0 +1,110 @@
+//! Evaluating the model at a Newton iterate: the displacements a rank needs, gathered from the
+//! distributed solution and the load curves, and the residual and tangent assembled there with
+//! one domain verdict for all ranks.
+
+use std::cell::RefCell;
+use std::time::Instant;
+
+use mpi::topology::SimpleCommunicator;
+
+use crate::case::Scene;
+use crate::dofs::DofMap;
+use crate::error::Result;
+use crate::model::{DomainIssue, Model, State};
+use crate::petsc::{CallbackError, Matrix, Scatter, Vector};
+
+use super::assembly;
+use super::collective::domain_check;
+
+/// The displacements of the state being evaluated, and the time spent assembling.
+pub(super) struct Evaluator {
+    scatter: Scatter,
+    /// Displacement of every dof this rank touches (`3 * node + c`); others stay zero.
+    pub u: Vec<f64>,
+    /// The load factor.
+    pub t: f64,
+    /// Seconds of residual and tangent assembly since the last reset.
+    pub assembly_seconds: f64,
+}
+
+impl Evaluator {
+    pub fn new(scatter: Scatter, nodes: usize) -> Evaluator {
+        Evaluator {
+            scatter,
+            u: vec![0.0; 3 * nodes],
+            t: 1.0,
+            assembly_seconds: 0.0,
+        }
+    }
+
+    /// Fills `u` from the Newton iterate `x` (free dofs) and the load curves at `t`
+    /// (constrained dofs).
+    pub fn load(&mut self, scene: &Scene, dofs: &DofMap, x: &Vector) -> Result<()> {
+        let vals = self.scatter.gather(x)?;
+        for (&d, v) in dofs.gathered_dofs.iter().zip(vals) {
+            self.u[d] = v;
+        }
+        for c in &scene.constraints {
+            let x = scene.mesh.coords[c.dof / 3];
+            self.u[c.dof] = c.value_at(self.t, &scene.curves, &scene.rotations, x);
+        }
+        Ok(())
+    }
+
+    /// The state of the last [`Evaluator::load`].
+    pub fn state<'a>(&'a self, scene: &'a Scene) -> State<'a> {
+        State {
+            scene,
+            u: &self.u,
+            t: self.t,
+        }
+    }
+}
+
+/// What the residual and tangent evaluations of a run share.
+#[derive(Clone, Copy)]
+pub(super) struct Evaluation<'a> {
+    pub scene: &'a Scene,
+    pub dofs: &'a DofMap,
+    pub model: &'a Model,
+    pub evaluator: &'a RefCell<Evaluator>,
+    pub world: &'a SimpleCommunicator,
+}
+
+impl Evaluation<'_> {
+    /// `F(x; t)` into `f` at the evaluator's load factor, timed; the domain issue of any rank
+    /// as one error on all (*collective*).
+    pub fn residual(&self, x: &Vector, f: &mut Vector) -> Result<Result<(), CallbackError>> {
+        let issue = self.timed(x, |at| assembly::residual(self.model, at, self.dofs, f))?;
+        Ok(domain_check(self.world, issue))
+    }
+
+    /// `dF/du (x; t)` into `jac`, as [`Evaluation::residual`].
+    pub fn jacobian(&self, x: &Vector, jac: &mut Matrix) -> Result<Result<(), CallbackError>> {
+        let issue = self.timed(x, |at| assembly::jacobian(self.model, at, self.dofs, jac))?;
+        Ok(domain_check(self.world, issue))
+    }
+
+    /// `F(x; t)` at load factor `t`, or `None` where a rank cannot evaluate it (*collective*).
+    pub fn residual_at(&self, x: &Vector, t: f64) -> Result<Option<Vector>> {
+        let mut f = x.duplicate()?;
+        self.evaluator.borrow_mut().t = t;
+        let ok = self.residual(x, &mut f)?.is_ok();
+        Ok(ok.then_some(f))
+    }
+
+    /// Loads `x` into the evaluator and runs `assemble` at its state, adding the time to the
+    /// evaluator's assembly seconds.
+    fn timed(
+        &self,
+        x: &Vector,
+        assemble: impl FnOnce(&State) -> Result<Option<DomainIssue>>,
+    ) -> Result<Option<DomainIssue>> {
+        let mut ev = self.evaluator.borrow_mut();
+        let started = Instant::now();
+        ev.load(self.scene, self.dofs, x)?;
+        let issue = assemble(&ev.state(self.scene))?;
+        ev.assembly_seconds += started.elapsed().as_secs_f64();
+        Ok(issue)
+    }
+}

@@ -1,0 +1,226 @@
+//! Setting a run up: the partition, the dofs, the model's contributions (only those the scene
+//! requires), the matrix pattern, the PETSc objects, and the output folder.
+
+use std::cell::RefCell;
+use std::time::Instant;
+
+use mpi::collective::Root;
+use mpi::topology::{Communicator, SimpleCommunicator};
+
+use crate::case::Scene;
+use crate::contact::frictional::ContactInterfaces;
+use crate::contact::tying::TiedInterfaces;
+use crate::dofs::DofMap;
+use crate::error::Result;
+use crate::io::output::Summary;
+use crate::model::{Contribution, Model};
+use crate::petsc::log::Phases;
+use crate::petsc::snes::Tolerances;
+use crate::petsc::{Matrix, Petsc, Scatter, Snes, Vector};
+use crate::solid::Bulk;
+
+use super::assembly::Pattern;
+use super::evaluation::{Evaluation, Evaluator};
+use super::predictor::{NewtonTangent, Tangent};
+use super::results::Results;
+use super::state::RunState;
+use super::{Linear, Run, RunOptions, FALLBACK_LINE_SEARCH, PHASES, TIMED_PARTS};
+
+impl<'a> Run<'a> {
+    /// Everything a run of `scene` needs, made (*collective*).
+    pub(super) fn set_up(scene: &'a Scene, petsc: &Petsc, opts: &'a RunOptions) -> Result<Self> {
+        let world = petsc.world();
+        let mut phases = Phases::new(&PHASES)?;
+        for name in TIMED_PARTS {
+            phases.add(name, 0.0);
+        }
+        let started = Instant::now();
+        let setup_stage = phases.push("setup")?;
+        let element_rank = partition(scene, &world, petsc.size())?;
+        let mut dofs = DofMap::new(
+            &scene.mesh,
+            element_rank,
+            petsc.rank(),
+            petsc.size(),
+            &scene.constrained_mask(),
+        );
+        let model = model_of(scene, &mut dofs, &world)?;
+        let x = Vector::new_mpi(dofs.owned_count)?;
+        let evaluator = RefCell::new(Evaluator::new(
+            Scatter::new(&x, &dofs.gathered_global)?,
+            scene.mesh.num_nodes(),
+        ));
+        let linear = Linear::new(scene, &dofs, &model, x, &evaluator, &world)?;
+        let fallback_line_search = (scene.has_friction() && linear.snes.line_search()? == "basic")
+            .then_some(FALLBACK_LINE_SEARCH);
+        let results = Results::new(scene, &opts.out_dir, model.history_columns(), &world)?;
+        drop(setup_stage);
+        phases.add("setup", started.elapsed().as_secs_f64());
+        let ranks = petsc.size();
+        Ok(Run {
+            scene,
+            opts,
+            rank: petsc.rank(),
+            ranks,
+            world,
+            dofs,
+            model,
+            linear,
+            evaluator,
+            results,
+            phases,
+            state: RunState::new(scene),
+            summary: Summary {
+                case: scene.name.clone(),
+                ranks,
+                converged: false,
+                ..Default::default()
+            },
+            fallback_line_search,
+            started,
+        })
+    }
+}
+
+/// The contributions of `scene` on this rank: the bulk, and the tied and contact interfaces
+/// where the scene has them; `dofs` then also gathers the interfaces' nodes (*collective*).
+fn model_of(scene: &Scene, dofs: &mut DofMap, world: &SimpleCommunicator) -> Result<Model> {
+    let mut interfaces: Vec<Box<dyn Contribution>> = Vec::new();
+    let tying = TiedInterfaces::new(scene, dofs, world)?;
+    if !tying.is_empty() {
+        interfaces.push(Box::new(tying));
+    }
+    let contact = ContactInterfaces::new(scene, dofs)?;
+    if !contact.is_empty() {
+        interfaces.push(Box::new(contact));
+    }
+    let gathered: Vec<usize> = interfaces.iter().flat_map(|c| c.coupled_nodes()).collect();
+    dofs.gather_also(&gathered);
+    let mut parts: Vec<Box<dyn Contribution>> = vec![Box::new(Bulk::new(scene, dofs)?)];
+    parts.extend(interfaces);
+    Ok(Model::new(parts))
+}
+
+impl Linear {
+    /// The pattern of the contributions that do not move, the matrix, the solution and its
+    /// work copies, and Newton (*collective*).
+    fn new(
+        scene: &Scene,
+        dofs: &DofMap,
+        model: &Model,
+        mut x: Vector,
+        evaluator: &RefCell<Evaluator>,
+        world: &SimpleCommunicator,
+    ) -> Result<Linear> {
+        let mut pattern = Pattern::new(dofs);
+        let fixed = model.parts().iter().filter(|c| !c.pattern_moves());
+        let zero = vec![0.0; 3 * scene.mesh.num_nodes()];
+        let reference = crate::model::State {
+            scene,
+            u: &zero,
+            t: 0.0,
+        };
+        pattern.add(dofs, &reference, fixed.map(|c| c.as_ref()));
+        // Near null space for algebraic multigrid (ignored by the default direct solve).
+        let rigid_modes = dofs.rigid_body_modes(&scene.mesh);
+        let jac = new_matrix(&pattern, dofs, &rigid_modes)?;
+        x.set_all(0.0)?;
+        let ev = Evaluation {
+            scene,
+            dofs,
+            model,
+            evaluator,
+            world,
+        };
+        let force_scale = residual_scale(&ev, &x)?;
+        let mut snes = Snes::new(
+            Tolerances {
+                atol: scene.newton.atol * force_scale,
+                rtol: scene.newton.rtol,
+                stol: 1e-14,
+                max_it: scene.newton.max_it,
+            },
+            &options_source(scene),
+            "basic",
+        )?;
+        if scene.is_linear() {
+            snes.freeze_jacobian()?;
+        }
+        Ok(Linear {
+            pattern,
+            rigid_modes,
+            jac,
+            x_prev: x.duplicate()?,
+            x_guess: x.duplicate()?,
+            x_attempt: x.duplicate()?,
+            x,
+            snes,
+            tangent: Tangent {
+                ready: false,
+                newton: NewtonTangent::Other,
+            },
+        })
+    }
+}
+
+/// A matrix of the pattern's sparsity, with the rigid body modes as its near null space.
+pub(super) fn new_matrix(
+    pattern: &Pattern,
+    dofs: &DofMap,
+    rigid_modes: &[Vec<f64>],
+) -> Result<Matrix> {
+    let mut jac = Matrix::new_aij(&pattern.sparsity(dofs))?;
+    jac.set_near_null_space(rigid_modes)?;
+    Ok(jac)
+}
+
+/// Rank 0 partitions the elements with METIS; every rank receives the same partition.
+fn partition(scene: &Scene, world: &SimpleCommunicator, ranks: usize) -> Result<Vec<usize>> {
+    let n = scene.mesh.num_elements();
+    let mut parts = vec![0u64; n];
+    if ranks > 1 {
+        if world.rank() == 0 {
+            let p = crate::mesh::partition::partition_elements(&scene.mesh, ranks)?;
+            parts.iter_mut().zip(p).for_each(|(a, b)| *a = b as u64);
+        }
+        world.process_at_rank(0).broadcast_into(&mut parts[..]);
+    }
+    Ok(parts.into_iter().map(|p| p as usize).collect())
+}
+
+/// The norm of the residual at u = 0 under the full load: the force scale of the absolute
+/// Newton tolerance (1 if the scene is unloaded, or if a rank cannot evaluate it).
+fn residual_scale(ev: &Evaluation, x: &Vector) -> Result<f64> {
+    let norm = match ev.residual_at(x, 1.0)? {
+        Some(f) => f.norm2()?,
+        None => 0.0,
+    };
+    ev.evaluator
+        .borrow_mut()
+        .u
+        .iter_mut()
+        .for_each(|v| *v = 0.0);
+    Ok(if norm.is_finite() && norm > 0.0 {
+        norm
+    } else {
+        1.0
+    })
+}
+
+/// Where PETSc's options came from, for messages: the command line, the scene's options file,
+/// and a study variant's `petsc` while one is set.
+fn options_source(scene: &Scene) -> String {
+    let mut sources = vec!["command line".to_string()];
+    if let Some(f) = &scene.petsc_options {
+        sources.push(f.display().to_string());
+    }
+    if crate::petsc::options::overridden() {
+        sources.push("the study variant's `petsc`".into());
+    }
+    let n = sources.len();
+    if n == 1 {
+        sources.remove(0)
+    } else {
+        format!("{} or {}", sources[..n - 1].join(", "), sources[n - 1])
+    }
+}

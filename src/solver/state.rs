@@ -1,0 +1,93 @@
+//! The mutable state of a run: where the load stands, the step size after cuts, and the
+//! counters the progress lines and the summary report.
+
+use crate::case::Scene;
+
+/// The load path so far.
+#[derive(Debug)]
+pub(super) struct RunState {
+    /// The load factor of the last finished step.
+    pub t: f64,
+    /// The size of the next step (halved by cuts, doubled back after a converged step).
+    pub dt: f64,
+    /// `1 / steps.count`.
+    pub dt_nominal: f64,
+    /// The smallest step allowed (a hair below the nominal one halved `max_cuts` times).
+    pub dt_min: f64,
+    /// Cuts of the current step in a row.
+    pub cuts_in_row: usize,
+    /// Finished steps.
+    pub step: usize,
+    pub counts: Counts,
+    /// The signal the ranks agreed to stop on ([`crate::interrupt`]), once they have: at a
+    /// step's start, or in a Jacobian evaluation, which ends the solve under way (any later
+    /// solve of the step returns at once).
+    pub stop: std::cell::Cell<Option<i32>>,
+}
+
+/// Counters over the whole run.
+#[derive(Debug, Default)]
+pub(super) struct Counts {
+    /// Steps whose Uzawa loop stopped at its cap.
+    pub uzawa_capped: usize,
+    /// Solves redone with the fallback line search.
+    pub fallbacks: usize,
+    /// [`Counts::fallbacks`] before the current step (for its progress line).
+    pub fallbacks_before: usize,
+    /// Steps accepted without convergence (`steps.on_failure = "continue"`).
+    pub unconverged: usize,
+    /// Newton iterations of every attempt, failed ones included (the last line).
+    pub newton: usize,
+    /// Every cut.
+    pub cuts: usize,
+}
+
+impl RunState {
+    /// The state of a run that has not begun.
+    pub fn new(scene: &Scene) -> RunState {
+        let dt_nominal = 1.0 / scene.steps as f64;
+        RunState {
+            t: 0.0,
+            dt: dt_nominal,
+            dt_nominal,
+            dt_min: dt_nominal * 0.5f64.powi(scene.max_cuts as i32) * (1.0 - 1e-12),
+            cuts_in_row: 0,
+            step: 0,
+            counts: Counts::default(),
+            stop: std::cell::Cell::new(None),
+        }
+    }
+
+    /// Whether the load path is complete.
+    pub fn finished(&self) -> bool {
+        self.t >= 1.0 - 1e-12
+    }
+
+    /// The load factor the next step aims at (the end of the load within 1e-9 of it).
+    pub fn next_load(&self) -> f64 {
+        if self.t + self.dt > 1.0 - 1e-9 {
+            1.0
+        } else {
+            self.t + self.dt
+        }
+    }
+
+    /// A step finished at load `t`.
+    pub fn advance(&mut self, t: f64) {
+        self.step += 1;
+        self.t = t;
+    }
+
+    /// After a finished step's outputs: the cut count and the step size start afresh.
+    pub fn close_step(&mut self) {
+        self.cuts_in_row = 0;
+        self.counts.fallbacks_before = self.counts.fallbacks;
+        self.dt = (2.0 * self.dt).min(self.dt_nominal);
+    }
+
+    /// A failed step is cut: the same step again at half the size.
+    pub fn cut(&mut self) {
+        self.cuts_in_row += 1;
+        self.counts.cuts += 1;
+    }
+}

@@ -1,0 +1,524 @@
+//! One load step: the matrix pattern of the step, the predictor, the Newton attempts (the stick
+//! predictor, full steps, the fallback line search), the Uzawa loop, and then either the step's
+//! outputs or a cut (module docs of [`super`]).
+
+use std::time::Instant;
+
+use mpi::collective::{CommunicatorCollectives, SystemOperation};
+
+use crate::error::{print_warning, Error, Result};
+use crate::interrupt;
+use crate::io::output::StepRecord;
+use crate::model::Augmented;
+use crate::petsc::{CallbackError, SnesOutcome};
+
+use super::assembly;
+use super::cut::{cut_limit, describe};
+use super::evaluation::Evaluation;
+use super::predictor::{predict, NewtonTangent};
+use super::results::StepRow;
+use super::setup::new_matrix;
+use super::summary::{not_started, retries_note, Load};
+use super::{Run, FULL_STEP_ITERATIONS, STICK_PREDICTOR_ITERATIONS, TIMED_PARTS};
+
+/// What became of a step.
+pub(super) enum StepEnd {
+    /// It converged (or was accepted unconverged) and its outputs are written.
+    Finished,
+    /// It failed and was cut: the same step again, halved.
+    Cut,
+    /// It failed with no cut left: the run ends.
+    GaveUp,
+    /// A signal stopped the run.
+    Stopped,
+}
+
+/// The solves of one step.
+pub(super) struct Solved {
+    /// The last solve's outcome.
+    outcome: SnesOutcome,
+    augmentations: usize,
+    /// Newton and linear iterations of every solve of the step (failed attempts included).
+    newton: usize,
+    linear: usize,
+}
+
+/// Seconds of a step's solves: assembly, and the rest (the linear solves).
+#[derive(Clone, Copy)]
+struct StepSeconds {
+    assembly: f64,
+    solve: f64,
+}
+
+impl Run<'_> {
+    /// One load step from the load of the last finished step.
+    pub(super) fn step(&mut self) -> Result<StepEnd> {
+        if self.stop_requested().is_some() {
+            return Ok(StepEnd::Stopped);
+        }
+        let (t, t_new) = (self.state.t, self.state.next_load());
+        if t_new <= t {
+            // (The case file's bound on steps.max_cuts keeps steps far above this.)
+            return Err(Error::Solve(format!(
+                "the load step {:.3e} no longer advances the load {} in floating point",
+                self.state.dt,
+                Load(t)
+            )));
+        }
+        self.linear.x.copy_to(&mut self.linear.x_prev)?;
+        self.update_pattern(t)?;
+        self.model.save();
+        self.evaluator.borrow_mut().assembly_seconds = 0.0;
+        // The contributions' timed work of this step's evaluations, the predictor's included.
+        let timed_before = self.model.phase_seconds();
+        let started = Instant::now();
+        if self.scene.predictor {
+            self.predict(t, t_new)?;
+        }
+        self.evaluator.borrow_mut().t = t_new;
+        let solve_stage = self.phases.push("solve")?;
+        let solved = self.solve_step(t_new);
+        self.linear.snes.force_iteration(false)?;
+        drop(solve_stage);
+        let solved = solved?;
+        self.state.counts.newton += solved.newton;
+        let seconds = self.account_time(started, &timed_before);
+        self.check_null_pivots(t_new)?;
+        if !solved.outcome.converged {
+            if let Some(end) = self.failed(&solved, t_new)? {
+                return Ok(end);
+            }
+            return self.finish_step(&solved, t_new, seconds, true);
+        }
+        self.finish_step(&solved, t_new, seconds, false)
+    }
+
+    /// The contributions whose pattern moves with the displacements add the couplings of the
+    /// state at load `t`; a new matrix when the pattern grew on some rank (*collective*).
+    fn update_pattern(&mut self, t: f64) -> Result<()> {
+        let moving: Vec<_> = self
+            .model
+            .parts()
+            .iter()
+            .filter(|c| c.pattern_moves())
+            .collect();
+        if moving.is_empty() {
+            return Ok(());
+        }
+        let mut ev = self.evaluator.borrow_mut();
+        ev.t = t;
+        ev.load(self.scene, &self.dofs, &self.linear.x)?;
+        let at = ev.state(self.scene);
+        let grew = self
+            .linear
+            .pattern
+            .add(&self.dofs, &at, moving.iter().map(|c| c.as_ref()));
+        let mut any = 0i32;
+        self.world
+            .all_reduce_into(&(grew as i32), &mut any, SystemOperation::max());
+        if any > 0 {
+            let linear = &mut self.linear;
+            linear.jac = new_matrix(&linear.pattern, &self.dofs, &linear.rigid_modes)?;
+            linear.jac.allow_new_nonzeros()?;
+            linear.tangent.newton = NewtonTangent::Other;
+        }
+        Ok(())
+    }
+
+    /// The load-step predictor from `t` to `t_new` (`steps.predictor`).
+    fn predict(&mut self, t: f64, t_new: f64) -> Result<()> {
+        let reuse = self.scene.predictor_reuses_newton_tangent
+            && self.linear.tangent.newton == NewtonTangent::OfLastConvergedStep;
+        let ev = Evaluation {
+            scene: self.scene,
+            dofs: &self.dofs,
+            model: &self.model,
+            evaluator: &self.evaluator,
+            world: &self.world,
+        };
+        let l = &mut self.linear;
+        predict(
+            &ev,
+            (&mut l.x, &mut l.jac, &mut l.snes),
+            (t, t_new),
+            &mut l.tangent,
+            reuse,
+        )
+    }
+
+    /// The step's solves: the stick predictor, then attempts and Uzawa augmentations until the
+    /// augmented contributions meet their tolerances.
+    fn solve_step(&mut self, t_new: f64) -> Result<Solved> {
+        let mut solved = Solved {
+            outcome: not_started(0),
+            augmentations: 0,
+            newton: 0,
+            linear: 0,
+        };
+        if self.scene.stick_predictor && self.model.is_frictional() {
+            self.stick_predictor(&mut solved)?;
+        }
+        loop {
+            let outcome = self.attempt(&mut solved)?;
+            solved.newton += outcome.iterations;
+            solved.linear += outcome.linear_iterations;
+            let converged = outcome.converged;
+            solved.outcome = outcome;
+            if !converged || !self.model.is_augmented() || !self.augmented(&mut solved, t_new)? {
+                return Ok(solved);
+            }
+            // The new multipliers change the residual by little once the gap is small: still
+            // take one Newton step, so that the displacements follow.
+            self.linear.snes.force_iteration(true)?;
+        }
+    }
+
+    /// The stick predictor (see `contact::frictional`): solve with every pressed node
+    /// sticking, then release the Coulomb law from there (or from the start, when it did not
+    /// converge).
+    fn stick_predictor(&mut self, solved: &mut Solved) -> Result<()> {
+        let l = &mut self.linear;
+        l.x.copy_to(&mut l.x_guess)?;
+        self.model.set_stick_all(true);
+        let max_it = self
+            .linear
+            .snes
+            .set_max_iterations(STICK_PREDICTOR_ITERATIONS)?;
+        let pre = self.solve_once();
+        self.model.set_stick_all(false);
+        self.linear.snes.set_max_iterations(max_it)?;
+        let pre = pre?;
+        solved.newton += pre.iterations;
+        solved.linear += pre.linear_iterations;
+        if !pre.converged {
+            let l = &mut self.linear;
+            l.x_guess.copy_to(&mut l.x)?;
+        }
+        Ok(())
+    }
+
+    /// One attempt at the step's solve: full Newton steps, and with frictional contact, when
+    /// they do not converge within [`FULL_STEP_ITERATIONS`], the same solve from the same start
+    /// with the fallback line search (the failed attempt's iterations go to `solved`).
+    fn attempt(&mut self, solved: &mut Solved) -> Result<SnesOutcome> {
+        let Some(line_search) = self.fallback_line_search else {
+            return self.solve_once();
+        };
+        let l = &mut self.linear;
+        l.x.copy_to(&mut l.x_attempt)?;
+        let max_it = l.snes.set_max_iterations(FULL_STEP_ITERATIONS)?;
+        if max_it < FULL_STEP_ITERATIONS {
+            l.snes.set_max_iterations(max_it)?;
+        }
+        let first = self.solve_once();
+        self.linear.snes.set_max_iterations(max_it)?;
+        let first = first?;
+        if first.converged || self.state.stop.get().is_some() {
+            return Ok(first);
+        }
+        solved.newton += first.iterations;
+        solved.linear += first.linear_iterations;
+        self.state.counts.fallbacks += 1;
+        let l = &mut self.linear;
+        l.x_attempt.copy_to(&mut l.x)?;
+        l.snes.set_line_search(line_search)?;
+        let second = self.solve_once();
+        self.linear.snes.set_line_search("basic")?;
+        second
+    }
+
+    /// One SNES solve of the current model from the current iterate (the closures borrow the
+    /// model, so they are made afresh for every solve).
+    fn solve_once(&mut self) -> Result<SnesOutcome> {
+        if let Some(signal) = self.state.stop.get() {
+            return Ok(not_started(signal));
+        }
+        let ev = Evaluation {
+            scene: self.scene,
+            dofs: &self.dofs,
+            model: &self.model,
+            evaluator: &self.evaluator,
+            world: &self.world,
+        };
+        let assembly_stage = self.phases.stage("assembly");
+        let (world, stop) = (&self.world, &self.state.stop);
+        let mut residual = |x: &_, f: &mut _| -> Result<(), CallbackError> {
+            let _stage = assembly_stage.map(|st| st.push()).transpose()?;
+            ev.residual(x, f)?
+        };
+        let mut jacobian = |x: &_, j: &mut _| -> Result<(), CallbackError> {
+            // Once per Newton iteration, before its costly part. As a domain error, SNES ends
+            // the solve cleanly (not converged); the step loop stops on it.
+            if let Some(signal) = interrupt::agreed(world) {
+                stop.set(Some(signal));
+                let name = interrupt::name(signal);
+                return Err(CallbackError::Domain(format!("interrupted by {name}")));
+            }
+            let _stage = assembly_stage.map(|st| st.push()).transpose()?;
+            ev.jacobian(x, j)?
+        };
+        let l = &mut self.linear;
+        l.snes
+            .solve(&mut l.x, &mut l.jac, &mut residual, &mut jacobian)
+    }
+
+    /// After a converged solve: one Uzawa step of the augmented contributions. Returns true
+    /// when they updated their multipliers (solve again).
+    fn augmented(&mut self, solved: &mut Solved, t_new: f64) -> Result<bool> {
+        let mut ev = self.evaluator.borrow_mut();
+        ev.load(self.scene, &self.dofs, &self.linear.x)?;
+        let at = ev.state(self.scene);
+        let step = self.model.augment(&at, solved.augmentations, &self.world);
+        match step.outcome {
+            Augmented::Converged => Ok(false),
+            Augmented::CapReached => {
+                self.state.counts.uzawa_capped += 1;
+                if self.rank == 0 {
+                    print_warning(format_args!(
+                        "step {} (load {}): an interface is still above its Uzawa tolerances \
+                         after uzawa_max = {} augmentations ({})",
+                        self.state.step + 1,
+                        Load(t_new),
+                        solved.augmentations,
+                        step.violation
+                    ));
+                }
+                Ok(false)
+            }
+            Augmented::Updated => {
+                solved.augmentations += 1;
+                Ok(true)
+            }
+        }
+    }
+
+    /// Adds the step's evaluation and solve times to the phases; the contributions' timed
+    /// parts of assembly apart (`timed_before`: their totals at the step's start).
+    fn account_time(
+        &mut self,
+        started: Instant,
+        timed_before: &std::collections::BTreeMap<&'static str, f64>,
+    ) -> StepSeconds {
+        let assembly = self.evaluator.borrow().assembly_seconds;
+        let total = started.elapsed().as_secs_f64();
+        self.phases.add("assembly", assembly);
+        self.phases.add("solve", (total - assembly).max(0.0));
+        let mut timed = 0.0;
+        for (name, now) in self.model.phase_seconds() {
+            let spent = now - timed_before.get(name).copied().unwrap_or(0.0);
+            if let Some(&part) = TIMED_PARTS.iter().find(|&&p| p == name) {
+                self.phases.add(part, spent);
+            }
+            timed += spent;
+        }
+        self.phases
+            .add("bulk_assembly", (assembly - timed).max(0.0));
+        StepSeconds {
+            assembly,
+            solve: total,
+        }
+    }
+
+    /// A singular tangent (the predictor's factorization counts: a linear scene may need no
+    /// Newton step) ends the run.
+    fn check_null_pivots(&self, t_new: f64) -> Result<()> {
+        match self.linear.snes.null_pivots()? {
+            Some(n) if n > 0 => Err(Error::Solve(format!(
+                "the tangent stiffness is singular ({n} null pivot(s) at load {}): a body can \
+                 move rigidly (constrain it: dirichlet or symmetry sets), or the input degrades \
+                 the tangent (too low a quadrature_degree, an extreme penalty or load)",
+                Load(t_new)
+            ))),
+            _ => Ok(()),
+        }
+    }
+
+    /// A step whose solve did not converge: stopped by a signal, cut, or given up; `None` when
+    /// it is accepted unconverged (`steps.on_failure = "continue"`: no cut left, and a state
+    /// Newton reached inside the domain).
+    fn failed(&mut self, solved: &Solved, t_new: f64) -> Result<Option<StepEnd>> {
+        let outcome = &solved.outcome;
+        if self.state.stop.get().is_some() {
+            // The run ends at the last finished step, as a failed one does.
+            self.restore()?;
+            return Ok(Some(StepEnd::Stopped));
+        }
+        let why = outcome
+            .domain_error
+            .clone()
+            .unwrap_or_else(|| outcome.reason.to_string());
+        let (state, scene) = (&self.state, self.scene);
+        let limit = cut_limit(state.cuts_in_row, scene.max_cuts, state.dt, state.dt_min)
+            .map(|limit| describe(&limit, state.dt, scene.max_cuts));
+        let accepted = limit.is_some()
+            && scene.continue_on_failure
+            && outcome.domain_error.is_none()
+            && self.linear.x.norm2()?.is_finite();
+        if accepted {
+            return Ok(None);
+        }
+        self.linear.tangent.newton = NewtonTangent::Other;
+        self.state.cut();
+        self.restore()?;
+        self.say(format!(
+            "  step {} load {:.6}: not converged ({why}) after {} Newton its; {}",
+            self.state.step + 1,
+            Load(t_new),
+            outcome.iterations,
+            match &limit {
+                Some(limit) => limit.clone(),
+                None => format!("cut {}/{}", self.state.cuts_in_row, scene.max_cuts),
+            }
+        ));
+        if let Some(limit) = limit {
+            self.summary.message = Some(format!(
+                "step {} (load {}) did not converge after {} cut(s), {limit}: {why}",
+                self.state.step + 1,
+                Load(t_new),
+                self.state.cuts_in_row - 1
+            ));
+            return Ok(Some(StepEnd::GaveUp));
+        }
+        self.state.dt *= 0.5;
+        Ok(Some(StepEnd::Cut))
+    }
+
+    /// Back to the state at the step's start.
+    fn restore(&mut self) -> Result<()> {
+        let l = &mut self.linear;
+        l.x_prev.copy_to(&mut l.x)?;
+        self.model.restore();
+        Ok(())
+    }
+
+    /// A step that converged, or that is `accepted` unconverged: its outputs, its commit, its
+    /// history row, the summary, and its progress line.
+    fn finish_step(
+        &mut self,
+        solved: &Solved,
+        t_new: f64,
+        seconds: StepSeconds,
+        accepted: bool,
+    ) -> Result<StepEnd> {
+        let outcome = &solved.outcome;
+        // The factorization the solver holds now: the last Newton iteration's of the step's
+        // final, converged solve when it took one (after the predictor's and any failed
+        // attempt's), else another.
+        self.linear.tangent.newton = if outcome.converged && outcome.iterations > 0 {
+            NewtonTangent::OfLastConvergedStep
+        } else {
+            NewtonTangent::Other
+        };
+        self.state.advance(t_new);
+        let output_started = Instant::now();
+        let output_stage = self.phases.push("output")?;
+        let residual = outcome.residual_history.last().copied().unwrap_or(0.0);
+        self.write_step_outputs(solved, residual, seconds, output_started)?;
+        drop(output_stage);
+        self.phases
+            .add("output", output_started.elapsed().as_secs_f64());
+        if self.rank == 0 {
+            self.summary.timings = self.phases.timings();
+            self.results.write_summary(&self.summary);
+        }
+        self.results.agree(&self.world)?;
+        // Reported once the step's files are written: a run stopped by its reader (a closed
+        // stdout) has the step on disk.
+        self.report_step(solved, residual, seconds, accepted);
+        self.state.close_step();
+        Ok(StepEnd::Finished)
+    }
+
+    /// The step's files and records: reactions, tracked sets, the VTU pieces (every
+    /// `output.vtu_every` steps and the last), the commit of the model, the history row and
+    /// the summary's step record (*collective*).
+    fn write_step_outputs(
+        &mut self,
+        solved: &Solved,
+        residual: f64,
+        seconds: StepSeconds,
+        output_started: Instant,
+    ) -> Result<()> {
+        let (step, t) = (self.state.step, self.state.t);
+        let mut ev = self.evaluator.borrow_mut();
+        ev.load(self.scene, &self.dofs, &self.linear.x)?;
+        let at = ev.state(self.scene);
+        let nodal = assembly::nodal_forces(&self.model, &at)?;
+        let reactions = self.results.reactions(&nodal, &self.world);
+        let tracked = self
+            .results
+            .tracked(self.scene, &self.dofs, at.u, &self.world);
+        let every = self.scene.vtu_every;
+        if every > 0 && (step % every == 0 || t >= 1.0) {
+            let outputs = self.model.output(&at, &self.world);
+            let dofs = (self.scene, &self.dofs);
+            self.results
+                .write_step(dofs, &outputs, at.u, (step, t), &self.world)?;
+        }
+        self.model.commit(&at, &self.world);
+        self.results.push_history(&StepRow {
+            step,
+            load: t,
+            newton_its: solved.newton,
+            augmentations: solved.augmentations,
+            cuts: self.state.cuts_in_row,
+            converged: solved.outcome.converged,
+            linear_its: solved.linear,
+            residual,
+            reactions: &reactions,
+            u: at.u,
+            tracked: &tracked,
+            contributions: &self.model.history(),
+            seconds: [
+                seconds.assembly,
+                (seconds.solve - seconds.assembly).max(0.0),
+                output_started.elapsed().as_secs_f64(),
+            ],
+        });
+        self.summary.steps.push(StepRecord {
+            step,
+            load: t,
+            newton_its: solved.newton,
+            cut: self.state.cuts_in_row,
+            converged: solved.outcome.converged,
+            augmentations: solved.augmentations,
+        });
+        Ok(())
+    }
+
+    /// The step's progress line (and the note of a step accepted unconverged).
+    fn report_step(
+        &mut self,
+        solved: &Solved,
+        residual: f64,
+        seconds: StepSeconds,
+        accepted: bool,
+    ) {
+        let (step, load) = (self.state.step, Load(self.state.t));
+        if accepted {
+            self.state.counts.unconverged += 1;
+            self.say(format!(
+                "  step {step} load {load:.6}: NOT converged ({}) after {} Newton its, |F| \
+                 {residual:.3e}; accepted (steps.on_failure = \"continue\")",
+                solved.outcome.reason, solved.newton
+            ));
+        }
+        let counts = &self.state.counts;
+        let uzawa = match solved.augmentations {
+            0 => String::new(),
+            n => format!(" ({n} Uzawa augmentations)"),
+        };
+        self.say(format!(
+            "  step {step} load {load:.6}: {} Newton its{uzawa}, |F| {residual:.3e}, {} linear \
+             its{}, {:.2} s",
+            solved.newton,
+            solved.linear,
+            retries_note(
+                self.state.cuts_in_row,
+                counts.fallbacks - counts.fallbacks_before,
+                self.fallback_line_search
+            ),
+            seconds.solve
+        ));
+    }
+}
