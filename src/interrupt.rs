@@ -18,8 +18,8 @@
 //! ignored when the program started (SIGINT in a background job of a script) stays ignored.
 //!
 //! Under `mpirun`, Open MPI answers a Ctrl-C by sending SIGTERM to every rank about a second
-//! later and SIGKILL about a second after that (measured with Open MPI 4.1.4): a run stops in
-//! time when one Newton iteration takes less than that. The exit status is then mpirun's (1).
+//! later and SIGKILL about a second after that (Open MPI 4.1.4): a run stops in time when one
+//! Newton iteration takes less than that. The exit status is then mpirun's (1).
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, OnceLock};

@@ -13,7 +13,8 @@
 //! | augmentation (Uzawa) | [`Contribution::augment`] | after a converged Newton solve |
 //! | a cut step | [`Contribution::save`], [`Contribution::restore`] | at a step's start, at a cut |
 //! | a converged step | [`Contribution::commit`] | once the step's outputs are written |
-//! | output fields | [`Contribution::output`], [`Contribution::history`], [`Contribution::metrics`] | per written step; at the end |
+//! | output | [`Contribution::output`], [`Contribution::history`] | per step written |
+//! | summary | [`Contribution::metrics`] | at the end of a run |
 //!
 //! A contribution never touches PETSc: it hands out **blocks** over mesh nodes (three dofs per
 //! node, `3 a + c` order) to a [`ForceSink`] or a [`TangentSink`], the way the element kernels

@@ -8,10 +8,10 @@
 //! The whole pattern is stored as explicit zeros when the matrix is made: PETSc's AIJ final
 //! assembly drops every preallocated slot that holds no value, so a contact block that is empty
 //! at the first assembly (the bodies not touching yet) would otherwise lose its slots and cost
-//! one reallocation of the row storage per entry when contact begins (measured on the scaling
-//! scene: 3067 reallocations in its first step, the contact assembly 8.5 times slower on
-//! one rank than on two). With the pattern kept, the matrix's nonzero structure is also the same in
-//! every Newton iteration of a step, so the LU's symbolic factorization can be reused.
+//! one reallocation of the row storage per entry when contact begins (docs/performance.md,
+//! "Assembly and the matrix pattern"). With the pattern kept, the matrix's nonzero structure is
+//! also the same in every Newton iteration of a step, so the LU's symbolic factorization can be
+//! reused.
 //!
 //! **Owned entries.** The bulk and contact tangents add their blocks to the rows this rank owns
 //! straight into the stored values (`super::owned_rows`), not through `MatSetValues`.
@@ -20,11 +20,8 @@
 //! owns (element blocks along the partition boundary, and the contact rows of the nodes a rank
 //! holds: `contact::frictional`, "Parallel layout") travel through PETSc's original stash
 //! (`-matstash_legacy`, a default the options override): the newer one sorts and merges every
-//! stashed entry before sending it, which on two ranks cost more than the messages themselves.
-//! Measured on the scaling scene (`cases/scaling`, 2 ranks, about 250 k and 130 k stashed
-//! entries per assembly; alternated runs of one build): `MatAssemblyBegin` and
-//! `MatAssemblyEnd` 1.8-1.9 s -> 0.6 s, the run 18.5-18.6 s -> 16.9-17.2 s (see
-//! `cases/scaling/README.md`).
+//! stashed entry before sending it, which on two ranks cost more than the messages themselves
+//! (docs/performance.md, "Assembly and the matrix pattern").
 
 use petsc_ffi as p;
 

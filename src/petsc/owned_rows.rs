@@ -2,8 +2,8 @@
 //!
 //! `MatSetValues` finds every entry of a block by a binary search in its row, with PETSc's
 //! generic per-entry checks around it: for the bulk tangent (81 x 81 blocks of Hex27 rows of
-//! about 375 stored columns) that search cost more than the element kernel itself (a profile of
-//! the scaling scene: about 12 % of the run in `MatSetValues_SeqAIJ`). [`OwnedRows`] reads
+//! about 375 stored columns) that search cost more than the element kernel itself
+//! (docs/performance.md, "Assembly and the matrix pattern"). [`OwnedRows`] reads
 //! the matrix's own compressed rows (`MatGetRowIJ`, `MatSeqAIJGetArray` of the diagonal block
 //! and, on more than one rank, of the off-diagonal block with its global column map
 //! `MatMPIAIJGetSeqAIJ`) and finds an entry from a hint: the free dofs of one node have

@@ -15,9 +15,9 @@
 //! Why full steps: the globalization is the load-step cutting of `crate::solver`, as in most
 //! finite-element codes. A backtracking line search on ||F||^2 (`bt`) stalls on slender
 //! structures, where the first full Newton step of a bending increment raises ||F|| (axial
-//! stretch from the linearized rotation) and the next ones converge quadratically: measured on a
-//! Neo-Hookean Hex20 cantilever, 6 iterations per step with `basic`, 18-23 plus a cut per step
-//! with `bt`. `-snes_linesearch_type bt` (or `cp`, `l2`) still selects another.
+//! stretch from the linearized rotation) and the next ones converge quadratically
+//! (docs/performance.md, "Newton on frictional contact"). `-snes_linesearch_type bt` (or `cp`,
+//! `l2`) still selects another.
 //!
 //! Frictional contact, whose residual is only piecewise smooth (open, stick, slip), also starts
 //! with full steps; `crate::solver` redoes a solve that they do not converge with another line

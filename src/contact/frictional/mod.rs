@@ -46,26 +46,25 @@
 //! at the edge of the primary surface.
 //!
 //! **Coverage scale** `s_A = 1 / c_A` for a partly covered node, 1 otherwise
-//! ([`coverage::coverage_scale`]). The node's force is `a_A t_A`, so without the scale a node covered by a
-//! fraction `c` of its support resists its penetration (and its slip) with `c` times the
-//! stiffness of a covered node, and its Uzawa update moves its force by `c` times as much (the
-//! slow augmentations this caused: docs/performance.md, "Uzawa augmentations"). With the
-//! scale every node's penalty force per unit
-//! normalized gap is that of a covered node. Covered nodes (the patch tests) are unchanged,
-//! and the Uzawa solution of the nodes held to the tolerances is the same (the scale changes
-//! the regularization, not the constraint). `s_A` depends on the geometry:
+//! ([`coverage::coverage_scale`]). The node's force is `a_A t_A`, so without the scale a node
+//! covered by a fraction `c` of its support resists its penetration (and its slip) with `c` times
+//! the stiffness of a covered node, and its Uzawa update moves its force by `c` times as much (the
+//! slow augmentations this caused: docs/performance.md, "Uzawa augmentations"). With the scale
+//! every node's penalty force per unit normalized gap is that of a covered node. Covered nodes (the
+//! patch tests) are unchanged, and the Uzawa solution of the nodes held to the tolerances is the
+//! same (the scale changes the regularization, not the constraint). `s_A` depends on the geometry:
 //! `d s / s = d a_full / a_full - d a / a` enters the tangent below.
 //!
 //! **Nodes sliding off.** A node below [`coverage::MIN_COVERAGE`] (0.1 %) carries no traction
-//! (docs/theory.md section 10: as a node slides off the edge of the primary surface `a_A -> 0`,
-//! and `1 / a_A` in `gh_A` and its derivative would be unbounded). Between 0.1 % and
+//! (docs/theory.md section 10: as a node slides off the edge of the primary surface `a_A -> 0`, and
+//! `1 / a_A` in `gh_A` and its derivative would be unbounded). Between 0.1 % and
 //! [`coverage::FADE_COVERAGE`] (5 %) the node's traction is multiplied by a smooth step from 0 to 1
-//! ([`coverage::coverage_fade`]), so that its force vanishes smoothly, with its derivative, as it slides
-//! off (and appears as it slides on); such a node takes no Uzawa update (it keeps its
+//! ([`coverage::coverage_fade`]), so that its force vanishes smoothly, with its derivative, as it
+//! slides off (and appears as it slides on); such a node takes no Uzawa update (it keeps its
 //! multipliers) and is not held to the tolerances. Slivers cannot be enforced in a few
-//! augmentations (the edge of the primary body must be bent to close them); a sliver's
-//! penetration is held by its covered neighbours. Why a smooth fade and not a plain threshold,
-//! and why these bounds: docs/performance.md, "Uzawa augmentations".
+//! augmentations (the edge of the primary body must be bent to close them); a sliver's penetration
+//! is held by its covered neighbours. Why a smooth fade and not a plain threshold, and why these
+//! bounds: docs/performance.md, "Uzawa augmentations".
 //!
 //! # Consistent tangent
 //!
@@ -112,17 +111,16 @@
 //!
 //! # Uzawa
 //!
-//! After a converged Newton solve, each node's multipliers are updated (law::uzawa_update);
-//! the violation of a node, relative to `h_A`, is the size of the normal update in gap units,
+//! After a converged Newton solve, each node's multipliers are updated (law::uzawa_update); the
+//! violation of a node, relative to `h_A`, is the size of the normal update in gap units,
 //! `|d lambda_N| / eps_N` (the penetration of a pressed node, the multiplier an open node still
 //! holds), and the slip `|dsh_A|` of a sticking node (docs/theory.md section 4; a slipping node has
 //! no tangential constraint to meet). A node without traction (no overlap, or coverage below
-//! [`coverage::MIN_COVERAGE`]) has its multipliers released without counting a violation (they exert
-//! no force whatever their value); a fading node keeps them and counts none. Solves repeat
-//! while a penetration is above `uzawa_tol`
-//! or a slip above `uzawa_slip_tol` (both relative to `h_A`; the slip tolerance is looser
-//! because with the soft default tangential penalty each update removes only part of a
-//! sticking node's slip), at most `uzawa_max` times per step. With
+//! [`coverage::MIN_COVERAGE`]) has its multipliers released without counting a violation (they
+//! exert no force whatever their value); a fading node keeps them and counts none. Solves repeat
+//! while a penetration is above `uzawa_tol` or a slip above `uzawa_slip_tol` (both relative to
+//! `h_A`; the slip tolerance is looser because with the soft default tangential penalty each update
+//! removes only part of a sticking node's slip), at most `uzawa_max` times per step. With
 //! `penalty_growth > 1`, an augmentation that did not bring the violation below a quarter of the
 //! previous one multiplies both penalties by that factor, up to `penalty_growth_cap`.
 //!
@@ -145,14 +143,14 @@
 //! secondary surface, one strip per rank of its block (`deal_in_strips`).
 //!
 //! The rank holding a traction node computes everything of that node and keeps its Uzawa
-//! multipliers and history: it integrates every face pair whose secondary face carries a node
-//! it holds (faces next to a strip cut are thus integrated by both neighbours; their pair
-//! statistics are counted by the holder of the face's first traction node), sums them in a
-//! canonical order (by secondary face, then primary face), and adds the node's forces and
-//! tangent block into the distributed vector and matrix, whatever ranks own the rows (the
-//! blocks summed first into node rows, [`crate::contact::block_sum::BlockSum`]). The results are therefore independent of
-//! the partition up to round-off: the order of PETSc's assembly, and which node blocks a rank
-//! sums before it.
+//! multipliers and history: it integrates every face pair whose secondary face carries a node it
+//! holds (faces next to a strip cut are thus integrated by both neighbours; their pair statistics
+//! are counted by the holder of the face's first traction node), sums them in a canonical order (by
+//! secondary face, then primary face), and adds the node's forces and tangent block into the
+//! distributed vector and matrix, whatever ranks own the rows (the blocks summed first into node
+//! rows, [`crate::contact::block_sum::BlockSum`]). The results are therefore independent of the
+//! partition up to round-off: the order of PETSc's assembly, and which node blocks a rank sums
+//! before it.
 //!
 //! # Matrix pattern
 //!
@@ -229,9 +227,9 @@ const FORCE_SUM_NAMES: [&str; FORCE_SUMS] = [
     "max_slip",
 ];
 
-/// Gaps within this fraction of `h_A` of closing count as touching: zero pressure, closed
-/// tangent ([`crate::contact::law::normal_pressure_touching`]), so that surfaces that start in contact without load
-/// hold each other from the first iteration.
+/// Gaps within this fraction of `h_A` of closing count as touching: zero pressure, closed tangent
+/// ([`crate::contact::law::normal_pressure_touching`]), so that surfaces that start in contact
+/// without load hold each other from the first iteration.
 pub const TOUCH_TOLERANCE: f64 = 1e-10;
 
 /// Search margin of the evaluations, in secondary-face box diagonals.

@@ -28,11 +28,11 @@
 //! Forward-mode automatic differentiation (`num_dual`) over the node and the current segment's
 //! nodes: the closest point is found in floats, then one Newton step in dual numbers,
 //! `xi = xi* - H^-1 r(xi*, x)`, `r_a = (x_S(xi) - x_A) . x_S,a`, carries its exact derivative
-//! (`H = dr/dxi`, itself from dual numbers in `xi`). Contact forces come only from points on a
-//! face or its [`EXTENSION`], where this is exact; a point clamped onto the face boundary
-//! would be held fixed (a defensive branch, not reached by `contact::frictional`). The slip is linear in the old segment's
-//! nodes (`N_i(xi')` fixed); the law's derivatives come from `contact::law` and are chained
-//! by hand.
+//! (`H = dr/dxi`, itself from dual numbers in `xi`). Contact forces come only from points on a face
+//! or its [`EXTENSION`], where this is exact; a point clamped onto the face boundary would be held
+//! fixed (a defensive branch, not reached by `contact::frictional`). The slip is linear in the old
+//! segment's nodes (`N_i(xi')` fixed); the law's derivatives come from `contact::law` and are
+//! chained by hand.
 
 mod pass;
 
@@ -82,9 +82,9 @@ pub struct Projection {
     pub distance: f64,
 }
 
-/// Closest point of `p` on `seg`: Newton on `r(xi) = (x_S(xi) - p) . x_S,xi = 0` from the
-/// face centre; a point beyond the face's [`EXTENSION`] is clamped into the face. `None` for a degenerate face or a diverging
-/// iteration.
+/// Closest point of `p` on `seg`: Newton on `r(xi) = (x_S(xi) - p) . x_S,xi = 0` from the face
+/// centre; a point beyond the face's [`EXTENSION`] is clamped into the face. `None` for a
+/// degenerate face or a diverging iteration.
 pub fn project(seg: &Segment, p: [f64; 3]) -> Option<Projection> {
     let quad = matches!(
         seg.kind,
