@@ -22,3 +22,16 @@ pub mod node_on_segment;
 pub mod normals;
 pub mod search;
 pub mod tying;
+
+use crate::case::Interface;
+use crate::mesh::FaceRef;
+
+/// The (secondary, primary) faces of pass `pass` of an interface: its declared sides in the
+/// first pass, swapped in the second (two passes: both sides carry tractions in turn).
+pub(crate) fn pass_sides(iface: &Interface, pass: usize) -> (&[FaceRef], &[FaceRef]) {
+    if pass == 0 {
+        (&iface.secondary, &iface.primary)
+    } else {
+        (&iface.primary, &iface.secondary)
+    }
+}

@@ -190,6 +190,17 @@ pub struct CellField {
     pub values: Vec<f64>,
 }
 
+impl CellField {
+    /// The field `name` of `components` values per element.
+    pub fn new(name: &'static str, components: usize, values: Vec<f64>) -> CellField {
+        CellField {
+            name,
+            components,
+            values,
+        }
+    }
+}
+
 /// What a contribution writes at a step.
 #[derive(Clone, Debug)]
 pub enum Output {

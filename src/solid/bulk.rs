@@ -215,16 +215,8 @@ impl Contribution for Bulk {
         vec![Output::Volume {
             elements: self.elements.iter().map(|(e, _)| *e).collect(),
             fields: vec![
-                CellField {
-                    name: "cauchy_stress",
-                    components: 9,
-                    values: stress,
-                },
-                CellField {
-                    name: "von_mises",
-                    components: 1,
-                    values: mises,
-                },
+                CellField::new("cauchy_stress", 9, stress),
+                CellField::new("von_mises", 1, mises),
             ],
         }]
     }

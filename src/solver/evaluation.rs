@@ -2,10 +2,7 @@
 //! distributed solution and the load curves, and the residual and tangent assembled there with
 //! one domain verdict for all ranks.
 
-use std::cell::RefCell;
 use std::time::Instant;
-
-use mpi::topology::SimpleCommunicator;
 
 use crate::case::Scene;
 use crate::dofs::DofMap;
@@ -15,6 +12,7 @@ use crate::petsc::{CallbackError, Matrix, Scatter, Vector};
 
 use super::assembly;
 use super::collective::domain_check;
+use super::Context;
 
 /// The displacements of the state being evaluated, and the time spent assembling.
 pub(super) struct Evaluator {
@@ -61,34 +59,33 @@ impl Evaluator {
     }
 }
 
-/// What the residual and tangent evaluations of a run share.
+/// The model evaluated in a run's context.
 #[derive(Clone, Copy)]
 pub(super) struct Evaluation<'a> {
-    pub scene: &'a Scene,
-    pub dofs: &'a DofMap,
+    pub cx: &'a Context<'a>,
     pub model: &'a Model,
-    pub evaluator: &'a RefCell<Evaluator>,
-    pub world: &'a SimpleCommunicator,
 }
 
 impl Evaluation<'_> {
     /// `F(x; t)` into `f` at the evaluator's load factor, timed; the domain issue of any rank
     /// as one error on all (*collective*).
     pub fn residual(&self, x: &Vector, f: &mut Vector) -> Result<Result<(), CallbackError>> {
-        let issue = self.timed(x, |at| assembly::residual(self.model, at, self.dofs, f))?;
-        Ok(domain_check(self.world, issue))
+        let issue = self.timed(x, |at| assembly::residual(self.model, at, &self.cx.dofs, f))?;
+        Ok(domain_check(&self.cx.world, issue))
     }
 
     /// `dF/du (x; t)` into `jac`, as [`Evaluation::residual`].
     pub fn jacobian(&self, x: &Vector, jac: &mut Matrix) -> Result<Result<(), CallbackError>> {
-        let issue = self.timed(x, |at| assembly::jacobian(self.model, at, self.dofs, jac))?;
-        Ok(domain_check(self.world, issue))
+        let issue = self.timed(x, |at| {
+            assembly::jacobian(self.model, at, &self.cx.dofs, jac)
+        })?;
+        Ok(domain_check(&self.cx.world, issue))
     }
 
     /// `F(x; t)` at load factor `t`, or `None` where a rank cannot evaluate it (*collective*).
     pub fn residual_at(&self, x: &Vector, t: f64) -> Result<Option<Vector>> {
         let mut f = x.duplicate()?;
-        self.evaluator.borrow_mut().t = t;
+        self.cx.evaluator.borrow_mut().t = t;
         let ok = self.residual(x, &mut f)?.is_ok();
         Ok(ok.then_some(f))
     }
@@ -100,10 +97,10 @@ impl Evaluation<'_> {
         x: &Vector,
         assemble: impl FnOnce(&State) -> Result<Option<DomainIssue>>,
     ) -> Result<Option<DomainIssue>> {
-        let mut ev = self.evaluator.borrow_mut();
+        let mut ev = self.cx.evaluator.borrow_mut();
         let started = Instant::now();
-        ev.load(self.scene, self.dofs, x)?;
-        let issue = assemble(&ev.state(self.scene))?;
+        ev.load(self.cx.scene, &self.cx.dofs, x)?;
+        let issue = assemble(&ev.state(self.cx.scene))?;
         ev.assembly_seconds += started.elapsed().as_secs_f64();
         Ok(issue)
     }

@@ -86,7 +86,7 @@ const STICK_PREDICTOR_ITERATIONS: usize = 6;
 const FULL_STEP_ITERATIONS: usize = 10;
 
 /// The line search of the second attempt: PETSc's `l2` (a secant minimization of ||F||^2 along
-/// the Newton direction); why this one: docs/performance.md, "Newton with frictional contact".
+/// the Newton direction); why this one: docs/performance.md, "Newton on frictional contact".
 const FALLBACK_LINE_SEARCH: &str = "l2";
 
 /// The phases of a run, each a PETSc log stage (`-log_view`) and a total in `summary.json`'s
@@ -112,17 +112,23 @@ pub struct RunOptions {
     pub quiet: bool,
 }
 
-/// Everything a run works with.
-struct Run<'a> {
+/// What a run works with and keeps from its set-up to its end.
+struct Context<'a> {
     scene: &'a Scene,
     opts: &'a RunOptions,
     rank: usize,
     ranks: usize,
     world: Rc<SimpleCommunicator>,
     dofs: DofMap,
+    /// The state being evaluated (its displacements gathered for the contributions).
+    evaluator: RefCell<Evaluator>,
+}
+
+/// Everything a run works with: the context, and what changes as it goes.
+struct Run<'a> {
+    cx: Context<'a>,
     model: Model,
     linear: Linear,
-    evaluator: RefCell<Evaluator>,
     results: Results,
     phases: Phases,
     state: RunState,
@@ -154,10 +160,10 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
     run.say(format!(
         "mortar: {} on {} rank(s): {} nodes, {} elements, {} free dofs, {} steps",
         scene.name,
-        run.ranks,
+        run.cx.ranks,
         scene.mesh.num_nodes(),
         scene.mesh.num_elements(),
-        run.dofs.total_free,
+        run.cx.dofs.total_free,
         scene.steps
     ));
     // Everything from here may fail on one rank only (I/O, say) while the others wait in a
@@ -165,9 +171,9 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
     // destroying them (MUMPS in particular) is itself collective and would hang.
     match run.steps().and_then(|()| run.finish()) {
         Ok(()) => Ok(run.summary),
-        Err(e) if run.ranks > 1 && !e.is_collective() => {
-            print_error(crate::error::abort_line(run.rank as i32, &e));
-            run.world.abort(1)
+        Err(e) if run.cx.ranks > 1 && !e.is_collective() => {
+            print_error(crate::error::abort_line(run.cx.rank as i32, &e));
+            run.cx.world.abort(1)
         }
         Err(e) => {
             run.record_error(&e);
@@ -181,7 +187,7 @@ impl Run<'_> {
     /// (`petsc::init`); should the signal be ignored after all, a failed write is no reason to
     /// stop it either.
     fn say(&self, msg: String) {
-        if self.rank == 0 && !self.opts.quiet {
+        if self.cx.rank == 0 && !self.cx.opts.quiet {
             use std::io::Write;
             let _ = writeln!(std::io::stdout(), "{msg}");
         }
@@ -209,14 +215,14 @@ impl Run<'_> {
         self.summary.converged = false;
         self.summary.message = Some(e.to_string());
         self.summary.timings = self.phases.timings();
-        if self.rank == 0 {
+        if self.cx.rank == 0 {
             self.results.write_summary(&self.summary);
         }
     }
 
     /// The signal the ranks agreed to stop on, if any, asked of them all now (*collective*).
     fn stop_requested(&self) -> Option<i32> {
-        let signal = interrupt::agreed(&self.world)?;
+        let signal = interrupt::agreed(&self.cx.world)?;
         self.state.stop.set(Some(signal));
         Some(signal)
     }

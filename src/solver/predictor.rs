@@ -63,11 +63,11 @@ pub(super) fn predict(
     rhs.scale(1.0 / EPS)?;
     rhs.axpy(1.0, &f0)?;
     if !tangent.ready && !reuse_newton_tangent {
-        ev.evaluator.borrow_mut().t = t0;
+        ev.cx.evaluator.borrow_mut().t = t0;
         if ev.jacobian(x, jac)?.is_err() {
             return Ok(());
         }
-        tangent.ready = ev.scene.is_linear();
+        tangent.ready = ev.cx.scene.is_linear();
     }
     let mut dx = x.duplicate()?;
     dx.set_all(0.0)?;

@@ -24,7 +24,7 @@ use super::evaluation::{Evaluation, Evaluator};
 use super::predictor::{NewtonTangent, Tangent};
 use super::results::Results;
 use super::state::RunState;
-use super::{Linear, Run, RunOptions, FALLBACK_LINE_SEARCH, PHASES, TIMED_PARTS};
+use super::{Context, Linear, Run, RunOptions, FALLBACK_LINE_SEARCH, PHASES, TIMED_PARTS};
 
 impl<'a> Run<'a> {
     /// Everything a run of `scene` needs, made (*collective*).
@@ -50,32 +50,34 @@ impl<'a> Run<'a> {
             Scatter::new(&x, &dofs.gathered_global)?,
             scene.mesh.num_nodes(),
         ));
-        let linear = Linear::new(scene, &dofs, &model, x, &evaluator, &world)?;
-        let fallback_line_search = (scene.has_friction() && linear.snes.line_search()? == "basic")
-            .then_some(FALLBACK_LINE_SEARCH);
-        let results = Results::new(scene, &opts.out_dir, model.history_columns(), &world)?;
-        drop(setup_stage);
-        phases.add("setup", started.elapsed().as_secs_f64());
-        let ranks = petsc.size();
-        Ok(Run {
+        let cx = Context {
             scene,
             opts,
             rank: petsc.rank(),
-            ranks,
+            ranks: petsc.size(),
             world,
             dofs,
-            model,
-            linear,
             evaluator,
-            results,
-            phases,
-            state: RunState::new(scene),
+        };
+        let linear = Linear::new(&cx, &model, x)?;
+        let fallback_line_search = (scene.has_friction() && linear.snes.line_search()? == "basic")
+            .then_some(FALLBACK_LINE_SEARCH);
+        let results = Results::new(scene, &opts.out_dir, model.history_columns(), &cx.world)?;
+        drop(setup_stage);
+        phases.add("setup", started.elapsed().as_secs_f64());
+        Ok(Run {
             summary: Summary {
                 case: scene.name.clone(),
-                ranks,
+                ranks: cx.ranks,
                 converged: false,
                 ..Default::default()
             },
+            cx,
+            model,
+            linear,
+            results,
+            phases,
+            state: RunState::new(scene),
             fallback_line_search,
             started,
         })
@@ -102,16 +104,10 @@ fn model_of(scene: &Scene, dofs: &mut DofMap, world: &SimpleCommunicator) -> Res
 }
 
 impl Linear {
-    /// The pattern of the contributions that do not move, the matrix, the solution and its
+    /// The pattern of the contributions that do not move, the matrix, the solution `x` and its
     /// work copies, and Newton (*collective*).
-    fn new(
-        scene: &Scene,
-        dofs: &DofMap,
-        model: &Model,
-        mut x: Vector,
-        evaluator: &RefCell<Evaluator>,
-        world: &SimpleCommunicator,
-    ) -> Result<Linear> {
+    fn new(cx: &Context, model: &Model, mut x: Vector) -> Result<Linear> {
+        let (scene, dofs) = (cx.scene, &cx.dofs);
         let mut pattern = Pattern::new(dofs);
         let fixed = model.parts().iter().filter(|c| !c.pattern_moves());
         let zero = vec![0.0; 3 * scene.mesh.num_nodes()];
@@ -125,13 +121,7 @@ impl Linear {
         let rigid_modes = dofs.rigid_body_modes(&scene.mesh);
         let jac = new_matrix(&pattern, dofs, &rigid_modes)?;
         x.set_all(0.0)?;
-        let ev = Evaluation {
-            scene,
-            dofs,
-            model,
-            evaluator,
-            world,
-        };
+        let ev = Evaluation { cx, model };
         let force_scale = residual_scale(&ev, &x)?;
         let mut snes = Snes::new(
             Tolerances {
@@ -195,7 +185,8 @@ fn residual_scale(ev: &Evaluation, x: &Vector) -> Result<f64> {
         Some(f) => f.norm2()?,
         None => 0.0,
     };
-    ev.evaluator
+    ev.cx
+        .evaluator
         .borrow_mut()
         .u
         .iter_mut()

@@ -68,14 +68,14 @@ impl Run<'_> {
         self.linear.x.copy_to(&mut self.linear.x_prev)?;
         self.update_pattern(t)?;
         self.model.save();
-        self.evaluator.borrow_mut().assembly_seconds = 0.0;
+        self.cx.evaluator.borrow_mut().assembly_seconds = 0.0;
         // The contributions' timed work of this step's evaluations, the predictor's included.
         let timed_before = self.model.phase_seconds();
         let started = Instant::now();
-        if self.scene.predictor {
+        if self.cx.scene.predictor {
             self.predict(t, t_new)?;
         }
-        self.evaluator.borrow_mut().t = t_new;
+        self.cx.evaluator.borrow_mut().t = t_new;
         let solve_stage = self.phases.push("solve")?;
         let solved = self.solve_step(t_new);
         self.linear.snes.force_iteration(false)?;
@@ -105,20 +105,21 @@ impl Run<'_> {
         if moving.is_empty() {
             return Ok(());
         }
-        let mut ev = self.evaluator.borrow_mut();
+        let mut ev = self.cx.evaluator.borrow_mut();
         ev.t = t;
-        ev.load(self.scene, &self.dofs, &self.linear.x)?;
-        let at = ev.state(self.scene);
+        ev.load(self.cx.scene, &self.cx.dofs, &self.linear.x)?;
+        let at = ev.state(self.cx.scene);
         let grew = self
             .linear
             .pattern
-            .add(&self.dofs, &at, moving.iter().map(|c| c.as_ref()));
+            .add(&self.cx.dofs, &at, moving.iter().map(|c| c.as_ref()));
         let mut any = 0i32;
-        self.world
+        self.cx
+            .world
             .all_reduce_into(&(grew as i32), &mut any, SystemOperation::max());
         if any > 0 {
             let linear = &mut self.linear;
-            linear.jac = new_matrix(&linear.pattern, &self.dofs, &linear.rigid_modes)?;
+            linear.jac = new_matrix(&linear.pattern, &self.cx.dofs, &linear.rigid_modes)?;
             linear.jac.allow_new_nonzeros()?;
             linear.tangent.newton = NewtonTangent::Other;
         }
@@ -127,14 +128,11 @@ impl Run<'_> {
 
     /// The load-step predictor from `t` to `t_new` (`steps.predictor`).
     fn predict(&mut self, t: f64, t_new: f64) -> Result<()> {
-        let reuse = self.scene.predictor_reuses_newton_tangent
+        let reuse = self.cx.scene.predictor_reuses_newton_tangent
             && self.linear.tangent.newton == NewtonTangent::OfLastConvergedStep;
         let ev = Evaluation {
-            scene: self.scene,
-            dofs: &self.dofs,
+            cx: &self.cx,
             model: &self.model,
-            evaluator: &self.evaluator,
-            world: &self.world,
         };
         let l = &mut self.linear;
         predict(
@@ -155,7 +153,7 @@ impl Run<'_> {
             newton: 0,
             linear: 0,
         };
-        if self.scene.stick_predictor && self.model.is_frictional() {
+        if self.cx.scene.stick_predictor && self.model.is_frictional() {
             self.stick_predictor(&mut solved)?;
         }
         loop {
@@ -234,14 +232,11 @@ impl Run<'_> {
             return Ok(not_started(signal));
         }
         let ev = Evaluation {
-            scene: self.scene,
-            dofs: &self.dofs,
+            cx: &self.cx,
             model: &self.model,
-            evaluator: &self.evaluator,
-            world: &self.world,
         };
         let assembly_stage = self.phases.stage("assembly");
-        let (world, stop) = (&self.world, &self.state.stop);
+        let (world, stop) = (&self.cx.world, &self.state.stop);
         let mut residual = |x: &_, f: &mut _| -> Result<(), CallbackError> {
             let _stage = assembly_stage.map(|st| st.push()).transpose()?;
             ev.residual(x, f)?
@@ -265,15 +260,17 @@ impl Run<'_> {
     /// After a converged solve: one Uzawa step of the augmented contributions. Returns true
     /// when they updated their multipliers (solve again).
     fn augmented(&mut self, solved: &mut Solved, t_new: f64) -> Result<bool> {
-        let mut ev = self.evaluator.borrow_mut();
-        ev.load(self.scene, &self.dofs, &self.linear.x)?;
-        let at = ev.state(self.scene);
-        let step = self.model.augment(&at, solved.augmentations, &self.world);
+        let mut ev = self.cx.evaluator.borrow_mut();
+        ev.load(self.cx.scene, &self.cx.dofs, &self.linear.x)?;
+        let at = ev.state(self.cx.scene);
+        let step = self
+            .model
+            .augment(&at, solved.augmentations, &self.cx.world);
         match step.outcome {
             Augmented::Converged => Ok(false),
             Augmented::CapReached => {
                 self.state.counts.uzawa_capped += 1;
-                if self.rank == 0 {
+                if self.cx.rank == 0 {
                     print_warning(format_args!(
                         "step {} (load {}): an interface is still above its Uzawa tolerances \
                          after uzawa_max = {} augmentations ({})",
@@ -299,7 +296,7 @@ impl Run<'_> {
         started: Instant,
         timed_before: &std::collections::BTreeMap<&'static str, f64>,
     ) -> StepSeconds {
-        let assembly = self.evaluator.borrow().assembly_seconds;
+        let assembly = self.cx.evaluator.borrow().assembly_seconds;
         let total = started.elapsed().as_secs_f64();
         self.phases.add("assembly", assembly);
         self.phases.add("solve", (total - assembly).max(0.0));
@@ -347,7 +344,7 @@ impl Run<'_> {
             .domain_error
             .clone()
             .unwrap_or_else(|| outcome.reason.to_string());
-        let (state, scene) = (&self.state, self.scene);
+        let (state, scene) = (&self.state, self.cx.scene);
         let limit = cut_limit(state.cuts_in_row, scene.max_cuts, state.dt, state.dt_min)
             .map(|limit| describe(&limit, state.dt, scene.max_cuts));
         let accepted = limit.is_some()
@@ -417,11 +414,11 @@ impl Run<'_> {
         drop(output_stage);
         self.phases
             .add("output", output_started.elapsed().as_secs_f64());
-        if self.rank == 0 {
+        if self.cx.rank == 0 {
             self.summary.timings = self.phases.timings();
             self.results.write_summary(&self.summary);
         }
-        self.results.agree(&self.world)?;
+        self.results.agree(&self.cx.world)?;
         // Reported once the step's files are written: a run stopped by its reader (a closed
         // stdout) has the step on disk.
         self.report_step(solved, residual, seconds, accepted);
@@ -440,22 +437,22 @@ impl Run<'_> {
         output_started: Instant,
     ) -> Result<()> {
         let (step, t) = (self.state.step, self.state.t);
-        let mut ev = self.evaluator.borrow_mut();
-        ev.load(self.scene, &self.dofs, &self.linear.x)?;
-        let at = ev.state(self.scene);
+        let mut ev = self.cx.evaluator.borrow_mut();
+        ev.load(self.cx.scene, &self.cx.dofs, &self.linear.x)?;
+        let at = ev.state(self.cx.scene);
         let nodal = assembly::nodal_forces(&self.model, &at)?;
-        let reactions = self.results.reactions(&nodal, &self.world);
+        let reactions = self.results.reactions(&nodal, &self.cx.world);
         let tracked = self
             .results
-            .tracked(self.scene, &self.dofs, at.u, &self.world);
-        let every = self.scene.vtu_every;
+            .tracked(self.cx.scene, &self.cx.dofs, at.u, &self.cx.world);
+        let every = self.cx.scene.vtu_every;
         if every > 0 && (step % every == 0 || t >= 1.0) {
-            let outputs = self.model.output(&at, &self.world);
-            let dofs = (self.scene, &self.dofs);
+            let outputs = self.model.output(&at, &self.cx.world);
+            let dofs = (self.cx.scene, &self.cx.dofs);
             self.results
-                .write_step(dofs, &outputs, at.u, (step, t), &self.world)?;
+                .write_step(dofs, &outputs, at.u, (step, t), &self.cx.world)?;
         }
-        self.model.commit(&at, &self.world);
+        self.model.commit(&at, &self.cx.world);
         self.results.push_history(&StepRow {
             step,
             load: t,

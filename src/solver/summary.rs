@@ -143,16 +143,16 @@ impl super::Run<'_> {
         summary.converged = summary.completed && self.state.counts.unconverged == 0;
         let interrupted = self.state.stop.get().map(interrupt::name);
         if let Some(signal) = &interrupted {
-            summary.message = Some(interruption(signal, summary, &self.opts.out_dir));
+            summary.message = Some(interruption(signal, summary, &self.cx.opts.out_dir));
         }
         // Results describe the last converged state (x was restored after a failed attempt).
-        let mut ev = self.evaluator.borrow_mut();
+        let mut ev = self.cx.evaluator.borrow_mut();
         ev.t = self.state.t;
-        ev.load(self.scene, &self.dofs, &self.linear.x)?;
-        let at = ev.state(self.scene);
+        ev.load(self.cx.scene, &self.cx.dofs, &self.linear.x)?;
+        let at = ev.state(self.cx.scene);
         self.results
-            .write_displacements(self.scene, &self.dofs, at.u, &self.world);
-        for (k, v) in self.model.metrics(&at, &self.world) {
+            .write_displacements(self.cx.scene, &self.cx.dofs, at.u, &self.cx.world);
+        for (k, v) in self.model.metrics(&at, &self.cx.world) {
             self.summary.metrics.insert(k, v);
         }
         drop(ev);
@@ -162,16 +162,16 @@ impl super::Run<'_> {
         );
         add_run_metrics(
             &mut self.summary,
-            self.scene,
+            self.cx.scene,
             &self.state,
             flags,
-            self.dofs.total_free,
+            self.cx.dofs.total_free,
         );
         self.summary.timings = self.phases.timings();
-        if self.rank == 0 {
+        if self.cx.rank == 0 {
             self.results.write_summary(&self.summary);
         }
-        self.results.agree(&self.world)?;
+        self.results.agree(&self.cx.world)?;
         self.say(self.last_line(interrupted.is_some()));
         match &self.summary.message {
             Some(m) if interrupted.is_some() => Err(Error::Interrupted(m.clone())),
@@ -195,7 +195,7 @@ impl super::Run<'_> {
         format!(
             "mortar: {outcome}: {} -> {}",
             totals(summary, &self.state, self.started.elapsed().as_secs_f64()),
-            self.opts.out_dir.display()
+            self.cx.opts.out_dir.display()
         )
     }
 }

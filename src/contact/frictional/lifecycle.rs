@@ -43,9 +43,7 @@ impl ContactInterfaces {
                 continue;
             }
             if done >= iface.uzawa_max {
-                if result == Augmented::Converged {
-                    result = Augmented::CapReached;
-                }
+                result = result.and(Augmented::CapReached);
                 continue;
             }
             for (p, a, _, h) in updates {

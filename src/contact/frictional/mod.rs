@@ -99,7 +99,7 @@
 //! linearized kernel's own weights as the law's inputs, a node on the Coulomb cone could take
 //! the stick tangent while its residual slipped (beyond the cone's tie band,
 //! [`crate::contact::law::CONE_TIE`]), and rank counts took different Newton paths
-//! (docs/performance.md, "Equal Newton paths on every rank count").
+//! (docs/performance.md, "Newton on frictional contact").
 //!
 //! A tangent linearizes only the pairs whose secondary face carries a node the law presses
 //! (`ContactPass::pressed_faces`, from the residual's weights as above): an open node has no
@@ -317,17 +317,12 @@ impl ContactInterfaces {
         {
             let mut passes = Vec::new();
             for pass in 0..iface.passes {
-                let (sec, pri) = if pass == 0 {
-                    (&iface.secondary, &iface.primary)
-                } else {
-                    (&iface.primary, &iface.secondary)
-                };
                 let workers = pass_ranks(pass, iface.passes, dofs.ranks);
                 passes.push(ContactPass::new(
                     scene,
                     dofs,
                     iface,
-                    (sec, pri),
+                    crate::contact::pass_sides(iface, pass),
                     &young,
                     workers,
                 )?);

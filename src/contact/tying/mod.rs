@@ -164,11 +164,7 @@ impl TiedInterfaces {
             let mut passes = Vec::new();
             let mut stats: BTreeMap<String, usize> = BTreeMap::new();
             for pass in 0..iface.passes {
-                let (sec, pri) = if pass == 0 {
-                    (&iface.secondary, &iface.primary)
-                } else {
-                    (&iface.primary, &iface.secondary)
-                };
+                let (sec, pri) = crate::contact::pass_sides(iface, pass);
                 let (local, local_stats) = setup::integrate_side(scene, dofs, iface, sec, pri);
                 for (k, v) in setup::reduce_stats(&local_stats, world) {
                     *stats.entry(k).or_insert(0) += v;
@@ -177,7 +173,7 @@ impl TiedInterfaces {
                 let rows = setup::build_rows(scene, iface, &all);
                 setup::check_coverage(scene, iface, pass, sec, &rows, world)?;
                 passes.push(Pass {
-                    secondary: sec.clone(),
+                    secondary: sec.to_vec(),
                     rows,
                 });
             }
@@ -266,9 +262,7 @@ impl TiedInterfaces {
                 continue;
             }
             if done >= tied.uzawa_max {
-                if result == Augmented::Converged {
-                    result = Augmented::CapReached;
-                }
+                result = result.and(Augmented::CapReached);
                 continue;
             }
             let (rank, owner) = (self.rank, &self.node_owner);

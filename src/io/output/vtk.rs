@@ -14,6 +14,17 @@ pub struct Field<'a> {
     pub values: &'a [f64],
 }
 
+impl<'a> Field<'a> {
+    /// The field `name` of `components` values per point (cell).
+    pub fn new(name: &'a str, components: usize, values: &'a [f64]) -> Field<'a> {
+        Field {
+            name,
+            components,
+            values,
+        }
+    }
+}
+
 /// One rank's part of the mesh with its fields, in VTK's unstructured-grid layout.
 #[derive(Clone, Debug)]
 pub struct Piece<'a> {
@@ -445,16 +456,8 @@ mod tests {
             cell_types: &types,
             connectivity: &conn,
             offsets: &offsets,
-            point_data: vec![Field {
-                name: "displacement",
-                components: 3,
-                values: &disp,
-            }],
-            cell_data: vec![Field {
-                name: "von Mises <σ>",
-                components: 1,
-                values: &stress,
-            }],
+            point_data: vec![Field::new("displacement", 3, &disp)],
+            cell_data: vec![Field::new("von Mises <σ>", 1, &stress)],
         };
         let p = dir.path("out_0.vtu");
         write_vtu(&p, &piece).unwrap();
@@ -496,11 +499,7 @@ mod tests {
             cell_types: &[],
             connectivity: &[],
             offsets: &[],
-            point_data: vec![Field {
-                name: "u",
-                components: 3,
-                values: &[],
-            }],
+            point_data: vec![Field::new("u", 3, &[])],
             cell_data: vec![],
         };
         let root = parse_xml(&vtu_document(Path::new("e.vtu"), &piece).unwrap());
@@ -526,11 +525,7 @@ mod tests {
             cell_types: &types,
             connectivity: &conn,
             offsets: &offsets,
-            point_data: vec![Field {
-                name: "displacement",
-                components: 3,
-                values: &disp,
-            }],
+            point_data: vec![Field::new("displacement", 3, &disp)],
             cell_data: vec![],
         };
         let p = dir.path("bad.vtu");
@@ -543,19 +538,11 @@ mod tests {
 
         let inf = [f64::INFINITY, 0.0];
         piece.point_data.clear();
-        piece.cell_data = vec![Field {
-            name: "pressure",
-            components: 1,
-            values: &inf,
-        }];
+        piece.cell_data = vec![Field::new("pressure", 1, &inf)];
         let msg = write_vtu(&p, &piece).unwrap_err().to_string();
         assert!(msg.contains("'pressure'") && msg.contains("inf"), "{msg}");
 
-        piece.cell_data = vec![Field {
-            name: "short",
-            components: 1,
-            values: &stress[..1],
-        }];
+        piece.cell_data = vec![Field::new("short", 1, &stress[..1])];
         assert!(write_vtu(&p, &piece)
             .unwrap_err()
             .to_string()

@@ -145,16 +145,8 @@ pub(super) fn write_interface_piece(
         .map(|f| cells.values(f, &row_of))
         .collect();
     let mut point_data = vec![
-        Field {
-            name: "displacement",
-            components: 3,
-            values: &disp,
-        },
-        Field {
-            name: "normal",
-            components: 3,
-            values: &normals,
-        },
+        Field::new("displacement", 3, &disp),
+        Field::new("normal", 3, &normals),
     ];
     for (field, values) in surface.fields.iter().zip(&values) {
         point_data.push(Field {

@@ -319,27 +319,15 @@ impl Results {
         let rank_field = vec![self.rank as f64; elements.len()];
         let mut cell_data: Vec<Field> = fields
             .iter()
-            .map(|f| Field {
-                name: f.name,
-                components: f.components,
-                values: &f.values,
-            })
+            .map(|f| Field::new(f.name, f.components, &f.values))
             .collect();
-        cell_data.push(Field {
-            name: "rank",
-            components: 1,
-            values: &rank_field,
-        });
+        cell_data.push(Field::new("rank", 1, &rank_field));
         let piece = Piece {
             points: &points,
             cell_types: &types,
             connectivity: &conn,
             offsets: &offsets,
-            point_data: vec![Field {
-                name: "displacement",
-                components: 3,
-                values: &disp,
-            }],
+            point_data: vec![Field::new("displacement", 3, &disp)],
             cell_data,
         };
         write_vtu(&self.dir.join(self.piece_name(step, self.rank)), &piece)
