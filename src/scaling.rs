@@ -263,17 +263,13 @@ impl Scaling {
                 ..Default::default()
             });
         }
-        plot::loglog_points(
-            &dir.join("scaling"),
-            &format!(
-                "Strong scaling: speedup {:.2} on {} ranks",
-                self.speedup(n - 1),
-                self.runs[n - 1].ranks
-            ),
-            "ranks",
-            "wall time (s)",
-            &series,
-        )
+        let stem = dir.join("scaling");
+        let title = format!(
+            "Strong scaling: speedup {:.2} on {} ranks",
+            self.speedup(n - 1),
+            self.runs[n - 1].ranks
+        );
+        plot::Figure::new(&stem, &title, "ranks", "wall time (s)").loglog_points(&series)
     }
 }
 
