@@ -18,10 +18,12 @@
 //! A control test runs the unedited [`VALID`] scene and expects success, so the rows are known
 //! to fail for the reason they were written for.
 
+mod common;
+
 use std::fmt::Write as _;
 use std::fs::File;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::Stdio;
 use std::thread::sleep;
 use std::time::{Duration, Instant};
 
@@ -816,12 +818,9 @@ fn execute(row: &Row) -> Result<Outcome, String> {
 
     let stderr_path = dir.join("stderr.txt");
     let log = |p: &Path| File::create(p).map_err(|e| format!("{}: {e}", p.display()));
-    let mut child = Command::new(env!("CARGO_BIN_EXE_mortar"))
+    let mut child = common::mortar_command()
         .args(&args)
         .current_dir(&dir)
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_mpi_yield_when_idle", "1")
         .env_remove("RUST_BACKTRACE")
         .stdin(Stdio::null())
         .stdout(log(&dir.join("stdout.txt"))?)
