@@ -18,10 +18,12 @@
 //! A control test runs the unedited [`VALID`] scene and expects success, so the rows are known
 //! to fail for the reason they were written for.
 
+mod common;
+
 use std::fmt::Write as _;
 use std::fs::File;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::Stdio;
 use std::thread::sleep;
 use std::time::{Duration, Instant};
 
@@ -201,6 +203,23 @@ fn text(s: &str) -> Option<String> {
 
 /// The table of bad inputs.
 fn rows() -> Vec<Row> {
+    [
+        case_file_and_mesh_rows(),
+        material_rows(),
+        load_rows(),
+        interface_rows(),
+        step_newton_and_verification_rows(),
+        name_and_bound_rows(),
+        overflow_rows(),
+        option_and_command_line_rows(),
+    ]
+    .into_iter()
+    .flatten()
+    .collect()
+}
+
+/// Rows of the table: The case file as a whole, its `[[mesh]]` tables and Gmsh files.
+fn case_file_and_mesh_rows() -> Vec<Row> {
     use Content::{Data, Text};
     vec![
         // --- The case file as a whole.
@@ -316,6 +335,12 @@ fn rows() -> Vec<Row> {
             .file("mesh.msh", Data("bad/zero_node_count.msh")),
         check("msh_huge_node_count", text(GMSH), "mesh.msh")
             .file("mesh.msh", Data("bad/huge_node_count.msh")),
+    ]
+}
+
+/// Rows of the table: `[[material]]`.
+fn material_rows() -> Vec<Row> {
+    vec![
         // --- [[material]].
         check(
             "young_wrong_type",
@@ -368,6 +393,12 @@ fn rows() -> Vec<Row> {
             valid_plus(MATERIAL),
             "material[1]",
         ),
+    ]
+}
+
+/// Rows of the table: Constraints and loads.
+fn load_rows() -> Vec<Row> {
+    vec![
         // --- Constraints and loads.
         check(
             "symmetry_missing_set",
@@ -449,7 +480,13 @@ value = [0.0, 0.0, -1.0]
             valid_plus("[output]\nreactions = [\"b.ymax\"]\n"),
             "b.ymax",
         ),
-        // --- Steps, Newton, verification.
+    ]
+}
+
+/// Rows of the table: `[[interface]]`.
+fn interface_rows() -> Vec<Row> {
+    vec![
+        // --- Interfaces.
         check(
             "interface_unknown_kind",
             valid_plus("[[interface]]\nname = \"i\"\nkind = \"glued\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\n"),
@@ -525,6 +562,13 @@ value = [0.0, 0.0, -1.0]
             valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\n\n[verification]\nkind = \"contact_patch\"\nstress = [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, -1.0]]\n"),
             "pressure",
         ),
+    ]
+}
+
+/// Rows of the table: Steps, Newton, verification.
+fn step_newton_and_verification_rows() -> Vec<Row> {
+    vec![
+        // --- Steps, Newton, verification.
         check(
             "rotation_with_zero_axis",
             valid_plus("[[dirichlet]]\nset = \"b.zmin\"\ncomponents = [\"x\"]\nrotation = { axis = [0.0, 0.0, 0.0], angle = 1.0 }\n"),
@@ -605,6 +649,13 @@ value = [0.0, 0.0, -1.0]
             valid_plus("[verification]\nkind = \"hertz\"\nradius = 1.0\ninterface = \"i\"\nmodel_fraction = 0.25\ninner_radius = 1.0\n"),
             "verification.inner_radius",
         ),
+    ]
+}
+
+/// Rows of the table: Names that become file names, duplicates, bounds.
+fn name_and_bound_rows() -> Vec<Row> {
+    use Content::Text;
+    vec![
         // --- Names that become file names, duplicates, bounds (found by a fuzzing sweep).
         check(
             "name_with_a_path",
@@ -681,6 +732,13 @@ value = [0.0, 0.0, -1.0]
             .args(&["-log_view", ":not_a_folder/log.txt"]),
         run("stray_word_after_an_option_value", text(VALID), "extra.toml")
             .args(&["-ksp_type", "preonly", "extra.toml"]),
+    ]
+}
+
+/// Rows of the table: Values that overflow (found by a fuzzing sweep).
+fn overflow_rows() -> Vec<Row> {
+    vec![
+        // --- Values that overflow (found by the same sweep).
         check(
             "tangential_penalty_overflowing",
             valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\ntangential_penalty = 1e300\n"),
@@ -726,6 +784,13 @@ value = [0.0, 0.0, -1.0]
             valid_plus("[[dirichlet]]\nset = \"b.zmin\"\ncomponents = [\"x\"]\nrotation = { axis = [1e200, 1e200, 0.0], angle = 1.0, centre = [1e300, 0.0, 0.0] }\n"),
             "centre",
         ),
+    ]
+}
+
+/// Rows of the table: PETSc options and the command line.
+fn option_and_command_line_rows() -> Vec<Row> {
+    use Content::Text;
+    vec![
         // --- PETSc options, on the command line and in a file.
         check(
             "missing_petsc_options_file",
@@ -738,13 +803,16 @@ value = [0.0, 0.0, -1.0]
         run("pc_type_nonsense", text(VALID), "nonsense").args(&["-pc_type", "nonsense"]),
         run("snes_rtol_nan", text(VALID), "-snes_rtol").args(&["-snes_rtol", "nan"]),
         run("snes_atol_negative", text(VALID), "-snes_atol").args(&["-snes_atol", "-1"]),
-        run("snes_max_it_negative", text(VALID), "-snes_max_it -5")
-            .args(&["-snes_max_it", "-5"]),
+        run("snes_max_it_negative", text(VALID), "-snes_max_it -5").args(&["-snes_max_it", "-5"]),
         // Read by PETSc only at the first factorization; checked before the first step.
         run("solver_package_missing", text(VALID), "nonexistent")
             .args(&["-pc_factor_mat_solver_type", "nonexistent"]),
-        run("package_option_not_an_integer", text(VALID), "-mat_mumps_icntl_8 xyz")
-            .args(&["-mat_mumps_icntl_8", "xyz"]),
+        run(
+            "package_option_not_an_integer",
+            text(VALID),
+            "-mat_mumps_icntl_8 xyz",
+        )
+        .args(&["-mat_mumps_icntl_8", "xyz"]),
         run(
             "petscrc_bad_integer",
             valid_top(r#"petsc_options = "petscrc""#),
@@ -816,12 +884,9 @@ fn execute(row: &Row) -> Result<Outcome, String> {
 
     let stderr_path = dir.join("stderr.txt");
     let log = |p: &Path| File::create(p).map_err(|e| format!("{}: {e}", p.display()));
-    let mut child = Command::new(env!("CARGO_BIN_EXE_mortar"))
+    let mut child = common::mortar_command()
         .args(&args)
         .current_dir(&dir)
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_mpi_yield_when_idle", "1")
         .env_remove("RUST_BACKTRACE")
         .stdin(Stdio::null())
         .stdout(log(&dir.join("stdout.txt"))?)

@@ -9,24 +9,13 @@
 
 mod common;
 
-use std::path::Path;
-
 #[test]
 #[cfg_attr(
     debug_assertions,
     ignore = "release only: cargo test --release --test bending"
 )]
 fn one_and_two_passes_bend_like_the_conforming_mesh() {
-    let study = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/bending/study.toml");
-    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("bending_study");
-    let _ = std::fs::remove_dir_all(&out);
-    let status = common::mortar_command()
-        .arg("study")
-        .arg(&study)
-        .arg("--out")
-        .arg(&out)
-        .status()
-        .expect("cannot start mortar");
+    let (out, status) = common::run_shipped("study", "bending", "study.toml", "bending_study", &[]);
     assert!(status.success(), "the bending study failed");
     assert!(out.join("curves.png").is_file() && out.join("curves.svg").is_file());
     let s = common::summary(&out);

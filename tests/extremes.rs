@@ -29,6 +29,11 @@ fn extremes(full: bool) -> Vec<Extreme> {
     };
     let penalty = |p: &str| with("friction = 0.3", &format!("friction = 0.3\npenalty = {p}"));
     let blocks = "lo = [0.25, 0.1, 0.5]\nhi = [0.95, 0.9, 1.0]";
+    let off_the_edge = with("value = [0.2]", "value = [1.0]").replace("count = 5", "count = 12");
+    let slivers = with(
+        blocks,
+        "lo = [0.250000001, 0.100000001, 0.5]\nhi = [0.950000001, 0.900000001, 1.0]",
+    );
     let mut cases: Vec<Extreme> = vec![
         (
             "base (one element through the thickness)",
@@ -43,19 +48,8 @@ fn extremes(full: bool) -> Vec<Extreme> {
             base.replace("poisson = 0.3", "poisson = 0.49"),
             true,
         ),
-        (
-            "slide off the edge",
-            with("value = [0.2]", "value = [1.0]").replace("count = 5", "count = 12"),
-            true,
-        ),
-        (
-            "offset 1e-9 (slivers)",
-            with(
-                blocks,
-                "lo = [0.250000001, 0.100000001, 0.5]\nhi = [0.950000001, 0.900000001, 1.0]",
-            ),
-            true,
-        ),
+        ("slide off the edge", off_the_edge.clone(), true),
+        ("offset 1e-9 (slivers)", slivers.clone(), true),
         (
             "penetration of half an element",
             with(blocks, "lo = [0.25, 0.1, 0.25]\nhi = [0.95, 0.9, 0.75]"),
@@ -63,17 +57,12 @@ fn extremes(full: bool) -> Vec<Extreme> {
         ),
         (
             "slide off the edge, fan pallets",
-            common::with_fan_pallets(
-                &with("value = [0.2]", "value = [1.0]").replace("count = 5", "count = 12"),
-            ),
+            common::with_fan_pallets(&off_the_edge),
             true,
         ),
         (
             "offset 1e-9 (slivers), fan pallets",
-            common::with_fan_pallets(&with(
-                blocks,
-                "lo = [0.250000001, 0.100000001, 0.5]\nhi = [0.950000001, 0.900000001, 1.0]",
-            )),
+            common::with_fan_pallets(&slivers),
             true,
         ),
     ];
@@ -94,12 +83,7 @@ fn extremes(full: bool) -> Vec<Extreme> {
             ),
             (
                 "node-on-segment, slide off the edge",
-                with("value = [0.2]", "value = [1.0]")
-                    .replace("count = 5", "count = 12")
-                    .replace(
-                        "kind = \"contact\"",
-                        "kind = \"contact\"\nmethod = \"node_on_segment\"",
-                    ),
+                common::with_node_on_segment(&off_the_edge),
                 false,
             ),
         ]);

@@ -79,31 +79,15 @@ fn compressed_block_converges_quadratically() {
         }
         let sl = 0.5 * (lo + hi);
         let pzz = mu * (fz - 1.0 / fz) + lambda * (sl * sl * fz).ln() / fz;
-        let (_, rows) = read_history(&out);
+        let history = common::History::read(&out);
+        let rows = history.rows();
         let last = rows.last().unwrap();
-        let rz = last[column(&out, "reaction_b.zmax_z")];
+        let rz = last[history.column("reaction_b.zmax_z")];
         assert!(
             (rz - pzz).abs() < 1e-8 * pzz.abs(),
             "{el}: reaction {rz} vs analytic {pzz}"
         );
     }
-}
-
-fn read_history(out: &std::path::Path) -> (Vec<String>, Vec<Vec<f64>>) {
-    let text = std::fs::read_to_string(out.join("history.csv")).unwrap();
-    let mut lines = text.lines();
-    let cols = lines.next().unwrap().split(',').map(String::from).collect();
-    let rows = lines
-        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
-        .collect();
-    (cols, rows)
-}
-
-fn column(out: &std::path::Path, name: &str) -> usize {
-    let (cols, _) = read_history(out);
-    cols.iter()
-        .position(|c| c == name)
-        .unwrap_or_else(|| panic!("no column {name} in {cols:?}"))
 }
 
 /// A Neo-Hookean Hex20 cantilever (10 x 1 x 1, E = 1000, nu = 0.3), clamped at x = 0, bent by a
@@ -123,7 +107,7 @@ fn cantilever_under_follower_pressure_converges_quadratically() {
     let text = std::fs::read_to_string(&case).unwrap();
     let plain = common::write_case(
         "finite_cantilever_plain",
-        &text.replace("[steps]\n", "[steps]\npredictor = false\n"),
+        &common::with_step_option(&text, "predictor = false"),
     );
     let (_, stdout) = common::run_case(&plain, 1, &["-snes_monitor"]);
     let ord = orders(&common::snes_monitor_histories(&stdout));

@@ -20,7 +20,7 @@ use mortar::study::set_path;
 
 /// Runs the shipped scene on `ranks` ranks into a fresh folder and returns it.
 fn run_scene(ranks: usize) -> PathBuf {
-    let case = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/hertz/case.toml");
+    let case = common::scene_dir("hertz").join("case.toml");
     let out = common::fresh_dir(&format!("hertz_{ranks}_ranks"));
     let output = common::run_raw(&case, ranks, &out, &["-q"]);
     assert!(
@@ -56,7 +56,7 @@ fn contact_radius_and_peak_pressure_within_3_percent_of_hertz_on_1_and_2_ranks()
 
     let two = run_scene(2);
     assert_eq!(common::summary(&two)["ranks"], 2);
-    let d = common::max_rel_difference(&common::displacements(&one), &common::displacements(&two));
+    let d = common::max_rel_difference_of_runs(&one, &two);
     assert!(d < 1e-9, "1 vs 2 ranks: displacements differ by {d:e}");
     for key in [
         "contact_force",
@@ -79,7 +79,7 @@ fn contact_radius_and_peak_pressure_within_3_percent_of_hertz_on_1_and_2_ranks()
     ignore = "release only: cargo test --release --test hertz"
 )]
 fn finest_study_level_within_3_percent_of_hertz() {
-    let study_file = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/hertz/study.toml");
+    let study_file = common::scene_dir("hertz").join("study.toml");
     let study: toml::Table = toml::from_str(&std::fs::read_to_string(study_file).unwrap()).unwrap();
     let finest = study["refinement"]
         .as_array()

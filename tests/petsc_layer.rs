@@ -79,11 +79,30 @@ fn petsc_layer_boundary_behaviour() {
     let mut jac = Matrix::new_aij(&diagonal_pattern()).unwrap();
     let mut snes = Snes::new(tolerances(), "test", "basic").unwrap();
 
-    // 1. A converging solve.
-    start(&mut x);
-    let out = snes
-        .solve(&mut x, &mut jac, &mut residual, &mut jacobian)
-        .unwrap();
+    converging_solve(&mut snes, &mut x, &mut jac);
+    panic_in_the_residual_is_reraised(&mut snes, &mut x, &mut jac);
+    jacobian_error_is_returned(&mut snes, &mut x, &mut jac);
+    domain_error_ends_the_solve(&mut snes, &mut x, &mut jac);
+    new_nonzero_is_a_petsc_error(&mut jac);
+    preallocated_pattern_survives_an_empty_assembly();
+    linear_solve(&mut x);
+
+    // Check 8: blocks added straight into the stored rows (`Matrix::with_owned_rows`) give the
+    // matrix of `MatSetValues`, bit for bit: rows of node-like column runs, constrained
+    // (negative) indices, columns in any order, and entries outside the pattern (kept aside,
+    // then added through `MatSetValues`).
+    owned_rows_match_set_values(&petsc);
+
+    drop(snes);
+    drop(jac);
+    drop(x);
+    drop(petsc);
+}
+
+/// Check 1: a converging solve, at Newton's quadratic rate.
+fn converging_solve(snes: &mut Snes, x: &mut Vector, jac: &mut Matrix) {
+    start(x);
+    let out = snes.solve(x, jac, &mut residual, &mut jacobian).unwrap();
     assert!(out.converged, "{}", out.reason);
     let xs = x.to_local_vec().unwrap();
     for (i, v) in xs.iter().enumerate() {
@@ -94,9 +113,12 @@ fn petsc_layer_boundary_behaviour() {
     assert!(n >= 4, "history {h:?}");
     let order = (h[n - 2] / h[n - 3]).ln() / (h[n - 3] / h[n - 4]).ln();
     assert!(order > 1.8, "Newton order {order} from {h:?}");
+}
 
-    // 2. A panic in the residual is re-raised after the solve, with its payload.
-    start(&mut x);
+/// Check 2: a panic in the residual is re-raised after the solve, with its payload, and the
+/// solver still works after it.
+fn panic_in_the_residual_is_reraised(snes: &mut Snes, x: &mut Vector, jac: &mut Matrix) {
+    start(x);
     let mut calls = 0;
     let mut panicking = |x: &Vector, f: &mut Vector| -> Result<(), CallbackError> {
         calls += 1;
@@ -106,7 +128,7 @@ fn petsc_layer_boundary_behaviour() {
         residual(x, f)
     };
     let caught = catch_unwind(AssertUnwindSafe(|| {
-        snes.solve(&mut x, &mut jac, &mut panicking, &mut jacobian)
+        snes.solve(x, jac, &mut panicking, &mut jacobian)
     }));
     let payload = caught.expect_err("the panic must be re-raised");
     let msg = payload
@@ -116,38 +138,42 @@ fn petsc_layer_boundary_behaviour() {
     assert_eq!(msg, "residual exploded");
 
     // The solver still works after a caught panic.
-    start(&mut x);
-    let out = snes
-        .solve(&mut x, &mut jac, &mut residual, &mut jacobian)
-        .unwrap();
+    start(x);
+    let out = snes.solve(x, jac, &mut residual, &mut jacobian).unwrap();
     assert!(out.converged);
+}
 
-    // 3. An error from the Jacobian closure is returned as that error.
-    start(&mut x);
+/// Check 3: an error from the Jacobian closure is returned as that error.
+fn jacobian_error_is_returned(snes: &mut Snes, x: &mut Vector, jac: &mut Matrix) {
+    start(x);
     let mut failing = |_: &Vector, _: &mut Matrix| -> Result<(), CallbackError> {
         Err(CallbackError::Fatal(Error::Solve(
             "tangent unavailable".into(),
         )))
     };
-    match snes.solve(&mut x, &mut jac, &mut residual, &mut failing) {
+    match snes.solve(x, jac, &mut residual, &mut failing) {
         Err(Error::Solve(m)) => assert_eq!(m, "tangent unavailable"),
         other => panic!("expected the closure's error, got {other:?}"),
     }
+}
 
-    // 4. A domain error ends the solve as DIVERGED_FUNCTION_DOMAIN, with the message kept.
-    start(&mut x);
+/// Check 4: a domain error ends the solve as DIVERGED_FUNCTION_DOMAIN, with the message
+/// kept.
+fn domain_error_ends_the_solve(snes: &mut Snes, x: &mut Vector, jac: &mut Matrix) {
+    start(x);
     let mut outside = |x: &Vector, f: &mut Vector| -> Result<(), CallbackError> {
         residual(x, f)?;
         Err(CallbackError::Domain("element 7 inverted".into()))
     };
-    let out = snes
-        .solve(&mut x, &mut jac, &mut outside, &mut jacobian)
-        .unwrap();
+    let out = snes.solve(x, jac, &mut outside, &mut jacobian).unwrap();
     assert!(!out.converged);
     assert_eq!(out.reason, "DIVERGED_FUNCTION_DOMAIN");
     assert_eq!(out.domain_error.as_deref(), Some("element 7 inverted"));
+}
 
-    // 5. A nonzero outside the preallocated pattern is a PETSc error with PETSc's message.
+/// Check 5: a nonzero outside the preallocated pattern is a PETSc error with PETSc's
+/// message.
+fn new_nonzero_is_a_petsc_error(jac: &mut Matrix) {
     let err = jac
         .add_values(&[0], &[1], &[1.0])
         .expect_err("new nonzeros must be an error");
@@ -165,10 +191,12 @@ fn petsc_layer_boundary_behaviour() {
         }
         other => panic!("expected a PETSc error, got {other:?}"),
     }
+}
 
-    // 6. The whole preallocated pattern survives an assembly that leaves part of it empty (a
-    // contact block before the bodies touch): a later entry there is no new nonzero, though new
-    // nonzeros are errors.
+/// Check 6: the whole preallocated pattern survives an assembly that leaves part of it empty
+/// (a contact block before the bodies touch): a later entry there is no new nonzero, though
+/// new nonzeros are errors.
+fn preallocated_pattern_survives_an_empty_assembly() {
     let mut wide = Sparsity {
         row_start: 0,
         rows: (0..N as i32).map(|i| vec![i]).collect(),
@@ -181,31 +209,22 @@ fn petsc_layer_boundary_behaviour() {
     m.assemble().unwrap();
     assert_eq!(m.get_values(&[0], &[0, 1]).unwrap(), vec![1.0, 2.0]);
     drop(m);
+}
 
-    // 7. A linear solve through the KSP wrapper: diag(2 x) y = 1 with x = 2, so y = 1/4.
+/// Check 7: a linear solve through the KSP wrapper: diag(2 x) y = 1 with x = 2, so y = 1/4.
+fn linear_solve(x: &mut Vector) {
     let mut b = Vector::new_mpi(N).unwrap();
     b.set_all(1.0).unwrap();
     let mut y = Vector::new_mpi(N).unwrap();
     let mut ksp = Ksp::new().unwrap();
     let mut a = Matrix::new_aij(&diagonal_pattern()).unwrap();
     x.set_all(2.0).unwrap();
-    jacobian(&x, &mut a).unwrap();
+    jacobian(x, &mut a).unwrap();
     let out = ksp.solve(&a, &b, &mut y).unwrap();
     assert!(out.converged);
     for (i, v) in y.to_local_vec().unwrap().iter().enumerate() {
         assert!((v - 0.25).abs() < 1e-15, "y[{i}] = {v}");
     }
-
-    // 8. Blocks added straight into the stored rows (`Matrix::with_owned_rows`) give the
-    // matrix of `MatSetValues`, bit for bit: rows of node-like column runs, constrained
-    // (negative) indices, columns in any order, and entries outside the pattern (kept aside,
-    // then added through `MatSetValues`).
-    owned_rows_match_set_values(&petsc);
-
     drop(ksp);
     drop(a);
-    drop(snes);
-    drop(jac);
-    drop(x);
-    drop(petsc);
 }

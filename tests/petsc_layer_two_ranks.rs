@@ -7,6 +7,8 @@
 //! binary, running in a parallel thread) writes Open MPI's and PMIx's variables into the
 //! environment that `mpirun` would then inherit.
 
+mod common;
+
 use mortar::petsc::Petsc;
 
 #[path = "petsc_checks/owned_rows.rs"]
@@ -33,22 +35,11 @@ fn owned_rows_on_two_ranks() {
         drop(petsc);
         return;
     }
-    let out = std::process::Command::new("mpirun")
-        .args([
-            "-n",
-            "2",
-            "--oversubscribe",
-            "--bind-to",
-            "none",
-            "--timeout",
-            "120",
-        ])
+    let mut mpirun = common::mpirun(2, 120);
+    let out = common::mpi_env(&mut mpirun)
         .arg(std::env::current_exe().unwrap())
         .args(["owned_rows_on_two_ranks", "--exact", "--nocapture"])
         .env(WORKER, "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_mpi_yield_when_idle", "1")
         .output()
         .expect("cannot start mpirun");
     let text =

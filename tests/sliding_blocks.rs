@@ -26,8 +26,6 @@
 
 mod common;
 
-use std::path::Path;
-
 #[test]
 #[cfg_attr(
     debug_assertions,
@@ -35,17 +33,8 @@ use std::path::Path;
 )]
 fn figure_7_cases_agree_and_slip_at_mu() {
     // `mortar run` of the scene runs its figure study (output.figure) into <out>/figure.
-    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/sliding_blocks/case.toml");
-    let run = Path::new(env!("CARGO_TARGET_TMPDIR")).join("figure7");
-    let _ = std::fs::remove_dir_all(&run);
-    let status = common::mortar_command()
-        .arg("run")
-        .arg(&scene)
-        .arg("--out")
-        .arg(&run)
-        .arg("-q")
-        .status()
-        .expect("cannot start mortar");
+    let (run, status) =
+        common::run_shipped("run", "sliding_blocks", "case.toml", "figure7", &["-q"]);
     assert!(status.success(), "the scene or its Figure 7 study failed");
     let out = run.join("figure");
     for f in ["curves.png", "curves.svg", "study.csv"] {
@@ -79,10 +68,8 @@ fn figure_7_cases_agree_and_slip_at_mu() {
         let smooth = m(&format!("smoothness_{variant}"));
         assert!(smooth < MORTAR_SMOOTHNESS, "{variant}: smoothness {smooth}");
     }
-    // The Uzawa target on the one-pass mortar cases: at most 5 augmentations in every
-    // step (measured: case 2 at most 4, case 3 at most 3, case 4 at most 5, in three steps whose
-    // fifth augmentation ends at 0.53-0.77 of the tolerance; case 4 took up to 10, the cap, in 13
-    // steps before the coverage scale of the penalties), and so no step left at the cap.
+    // The Uzawa target on the one-pass mortar cases: at most 5 augmentations in every step, and
+    // so no step left at the cap.
     for variant in [
         "case2_hex27_lower_secondary",
         "case3_hex27_upper_secondary",
@@ -104,8 +91,7 @@ fn figure_7_cases_agree_and_slip_at_mu() {
         let smooth = s["metrics"][format!("smoothness_{variant}").as_str()].as_f64();
         println!("{variant}: smoothness {smooth:?}");
     }
-    // How they end, printed (measured on 2026-11-23: case 5 at step 26 with the step size at
-    // its floor after 1 cut in a row, the branch `solver::cut_limit`'s unit test covers).
+    // How they end, printed.
     for variant in ["case5_hex8_nts_twopass", "case6_hex8_nts_lower_secondary"] {
         let run = common::summary(&out.join("runs").join(variant).join("0"));
         println!("{variant}: {}", run["message"]);
@@ -128,12 +114,8 @@ const MORTAR_SMOOTHNESS: f64 = 3.0;
 /// step's first full step may raise the residual while the stick and slip states settle), at
 /// most `END_GAME_ITERATIONS` = 3 iterations follow. Quadratic convergence takes a residual from
 /// 1e-2 of its scale to round-off (1e-13 of it here) in 2-3 (1e-2, 1e-4, 1e-8, 1e-16 with a
-/// constant near 1); a linear rate of 1e-3 needs 4. Measured: at most 2 in every one of 50
-/// solves (the test's 1-rank run, and a 2-rank run with `-snes_monitor`); with the Jacobian
-/// lagged by one iteration (`-snes_lag_jacobian 2`) up to 7. (The median of the three-point
-/// order estimate `log(r3 / r2) / log(r2 / r1)` over the last residuals, used before, could not
-/// tell those two apart: 1.84-1.86 against 1.67, since the last residual sits at round-off, and
-/// it moved by 0.3 between machines.)
+/// constant near 1); a linear rate of 1e-3 needs 4, and a Jacobian lagged by one iteration
+/// (`-snes_lag_jacobian 2`) more.
 #[test]
 #[cfg_attr(
     debug_assertions,
@@ -166,28 +148,25 @@ fn newton_converges_quadratically_within_8_iterations() {
     }
 
     let (out2, _) = common::run_case(&case, 2, &["-q"]);
-    let d = common::max_rel_difference(&common::displacements(&out), &common::displacements(&out2));
+    let d = common::max_rel_difference_of_runs(&out, &out2);
     assert!(d < 1e-8, "1 and 2 ranks differ by {d:e}");
 }
 
-/// The refined blocks of `cases/scaling` (without the predictor, whose start differed too)
-/// take the same Newton path on 1 and 2 ranks, step by step. Measured before the tangent took
-/// the law's inputs from the residual's weights: the last step started with a node on the
-/// Coulomb cone that the tangent's own weights (round-off apart) put 1.25e-10 inside it, stick,
-/// on one rank and not on the other: 6 and 9 iterations in that step. Both take 9 now.
+/// The refined blocks of `cases/scaling` (without the predictor, whose start may differ too)
+/// take the same Newton path on 1 and 2 ranks, step by step: the tangent takes the Coulomb
+/// law's inputs from the residual's weights, so that a node on the cone is in the same state
+/// (stick or slip) in both, whatever the round-off of the tangent's own weights.
 ///
 /// One iteration of slack per step: MUMPS's dynamic scheduling on two ranks changes the
 /// round-off from one run to the next, and a residual norm at the tolerance may then take one
-/// more iteration. A tangent that parts the paths again (the 3 iterations above, or the 7
-/// against 22 of an earlier round) still fails.
+/// more iteration. A tangent that parts the paths by more still fails.
 #[test]
 #[cfg_attr(
     debug_assertions,
     ignore = "release only: cargo test --release --test sliding_blocks"
 )]
 fn refined_blocks_take_one_newton_path_on_1_and_2_ranks_within_an_iteration() {
-    let text =
-        common::scene_text("scaling").replacen("[steps]\n", "[steps]\npredictor = false\n", 1);
+    let text = common::with_step_option(&common::scene_text("scaling"), "predictor = false");
     assert!(text.contains("predictor = false"));
     let case = common::write_scene_copy("refined_blocks_paths", "scaling", &text);
     let steps = |ranks: usize| -> Vec<u64> {

@@ -8,14 +8,14 @@ mod common;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 use mortar::io::plot::fitted_slope;
 
 /// A fresh folder with a copy of the thick-sphere case and `study.toml` = `study`.
 fn study_dir(name: &str, study: &str) -> PathBuf {
     let dir = common::fresh_dir(name);
-    let case = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/thick_sphere");
+    let case = common::scene_dir("thick_sphere");
     for f in ["case.toml", "petscrc"] {
         std::fs::copy(case.join(f), dir.join(f)).unwrap();
     }
@@ -25,10 +25,7 @@ fn study_dir(name: &str, study: &str) -> PathBuf {
 
 /// Runs `mortar study DIR/study.toml --out DIR/out ARGS` on one rank.
 fn run_study(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_mortar"))
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_mpi_yield_when_idle", "1")
+    common::mortar_command()
         .arg("study")
         .arg(dir.join("study.toml"))
         .args(args)
@@ -243,8 +240,7 @@ fn repeated_runs_keep_the_fastest_time() {
 }
 
 /// Peak memory is each run's own: a small run after a large one (the second variant's coarse
-/// run after the first's fine one) reads its own peak, not the memory the large run freed
-/// (measured: 59 MB after 198 MB, and 198 MB before the freed memory went back to the OS).
+/// run after the first's fine one) reads its own peak, not the memory the large run freed.
 #[test]
 fn peak_memory_is_each_runs_own() {
     let study = r#"
@@ -374,7 +370,7 @@ set = { "mesh.0.element" = "hex8" }
 }
 
 /// A factorization package PETSc does not have: found when each run sets up its solver (not
-/// inside a solve, where it used to end the study), so both runs of the variant are recorded as
+/// inside a solve, where it would end the study), so both runs of the variant are recorded as
 /// failed, and the one error line names the variant, the level and the package.
 #[test]
 fn a_missing_solver_package_fails_the_variants_runs() {
@@ -537,9 +533,8 @@ fn curves_compare_variants_at_the_last_level() {
 
 /// A run that cannot write its files ends the study, even for a variant that may fail: the
 /// next runs would meet the same full disk or missing permission. One line names the variant,
-/// the level and the file (the run's folder `runs/<variant>` is a file here). With the output
-/// errors agreed on by the ranks this was taken for the run's own failure, and the study went
-/// on and exited 0.
+/// the level and the file (the run's folder `runs/<variant>` is a file here): an output error,
+/// agreed on by the ranks, is not taken for the run's own failure.
 #[test]
 fn a_run_that_cannot_write_its_files_ends_the_study() {
     let dir = study_dir(
@@ -912,9 +907,8 @@ fn failed_runs_on_two_ranks_print_the_expectations_once() {
 
 /// A variant's solver package that PETSc lacks, in a study on 2 ranks: found when the run sets
 /// up its solver (on every rank alike), so the run is recorded as failed and the study goes on,
-/// and the one error line names the variant, the level and the variant's `petsc` as a source.
-/// (It used to surface in the first solve, where each rank aborted the job with its own line,
-/// naming neither, and no CSV was written.)
+/// and the one error line names the variant, the level and the variant's `petsc` as a source
+/// (not a line of each rank aborting the job in the first solve, and no CSV).
 #[test]
 fn a_variants_missing_solver_package_on_two_ranks_names_the_variant() {
     let study = study_with_a_failing_variant("", "nopackage").replace(
@@ -1022,14 +1016,14 @@ fn the_error_may_be_the_largest_of_several_metrics() {
     }
 }
 
-/// The contact patch's study as shipped, from its file (about 10 s): every run converges, the
+/// The contact patch's study as shipped, from its file: every run converges, the
 /// CSV and both plots (PNG and SVG) are written, its expectations (every one-pass mortar
 /// variant exact to 1e-10 at every level) are printed as met, and no run on the Pareto front is
 /// beaten in both error and time by another, with the study's own ties (errors at or below its
 /// `error_floor` equal, times within its `time_noise` equal).
 #[test]
 fn shipped_contact_patch_study_runs_from_its_file() {
-    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/contact_patch");
+    let scene = common::scene_dir("contact_patch");
     let dir = common::fresh_dir("study_contact_patch_shipped");
     for f in ["case.toml", "petscrc", "study.toml"] {
         std::fs::copy(scene.join(f), dir.join(f)).unwrap();
@@ -1073,33 +1067,6 @@ fn shipped_contact_patch_study_runs_from_its_file() {
     for (i, &p) in runs.iter().enumerate().filter(|(_, r)| r.2) {
         for (j, &q) in runs.iter().enumerate() {
             assert!(!beats(q, p), "run {j} beats run {i} on the front: {rows:?}");
-        }
-    }
-}
-
-/// Every study shipped in cases/ reads and validates (every variant x refinement of its case:
-/// paths, keys, meshes), so that one no test runs cannot rot unnoticed.
-#[test]
-fn every_shipped_study_is_valid() {
-    let cases = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases");
-    let mut studies = Vec::new();
-    for scene in std::fs::read_dir(&cases).unwrap() {
-        let scene = scene.unwrap().path();
-        if !scene.is_dir() {
-            continue;
-        }
-        for file in std::fs::read_dir(scene).unwrap() {
-            let path = file.unwrap().path();
-            let name = path.file_name().unwrap().to_string_lossy().into_owned();
-            if name.starts_with("study") && name.ends_with(".toml") {
-                studies.push(path);
-            }
-        }
-    }
-    assert!(studies.len() >= 9, "{studies:?}");
-    for path in studies {
-        if let Err(e) = mortar::study::Study::load(&path) {
-            panic!("{}: {e}", path.display());
         }
     }
 }
@@ -1192,8 +1159,8 @@ fn errors_may_be_taken_against_the_finest_run() {
 }
 
 /// A study run again into the same folder: a run that fails now leaves none of the outputs of
-/// the earlier study's run of the same name, whose `summary.json` (converged) used to be read
-/// for the failed run's Newton iterations.
+/// the earlier study's run of the same name, whose `summary.json` (converged) would be read for
+/// the failed run's Newton iterations.
 #[test]
 fn a_rerun_into_the_same_folder_keeps_nothing_of_the_last() {
     let failing = study_with_a_failing_variant("", "late");
@@ -1256,9 +1223,7 @@ may_fail = true
         stdout.contains("the defaults (variant 'defaults') have 1 of 2 runs on it"),
         "{stdout}"
     );
-    let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("out/summary.json")).unwrap())
-            .unwrap();
+    let s = common::summary(&dir.join("out"));
     assert_eq!(s["metrics"]["default_on_front"], 0.5, "{s}");
 }
 
@@ -1350,8 +1315,8 @@ fn an_interrupted_study_keeps_the_runs_it_finished() {
 }
 
 /// A second study into the folder of a running one is refused at once, with one line naming
-/// the folder (it used to empty the first one's run folders and write beside it); the first
-/// goes on, its finished run intact.
+/// the folder (instead of emptying the first one's run folders and writing beside it); the
+/// first goes on, its finished run intact.
 #[test]
 fn a_study_into_the_folder_of_a_running_one_is_refused() {
     let dir = long_study_dir("study_folder_in_use");

@@ -1,4 +1,4 @@
-//! The paper's Figure 4 (release mode: `cargo test --release --test tied_convergence`).
+//! The paper's Figure 4 (release mode: `cargo test --release --test tied_sphere_figure_4`).
 //!
 //! Reference: Lamé's thick sphere (a = 1, b = 2, p = 1, E = 1000, nu = 0.3) with a curved
 //! dissimilar tied interface at r = 1.5 between two Hex20 meshes (cases/thick_sphere_tied). The
@@ -14,28 +14,21 @@
 
 mod common;
 
-use std::path::Path;
-
 #[test]
 #[cfg_attr(
     debug_assertions,
-    ignore = "release only: cargo test --release --test tied_convergence"
+    ignore = "release only: cargo test --release --test tied_sphere_figure_4"
 )]
 fn figure_4_slopes_are_at_least_1_9() {
-    let study = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/thick_sphere_tied/study.toml");
-    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("figure4");
-    let _ = std::fs::remove_dir_all(&out);
-    let status = common::mortar_command()
-        .arg("study")
-        .arg(&study)
-        .arg("--out")
-        .arg(&out)
-        .arg("-q")
-        .status()
-        .expect("cannot start mortar");
+    let (out, status) = common::run_shipped(
+        "study",
+        "thick_sphere_tied",
+        "study.toml",
+        "figure4",
+        &["-q"],
+    );
     assert!(status.success(), "the study failed");
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let summary = common::summary(&out);
     let metrics = &summary["metrics"];
     for variant in [
         "scheme2_onepass_coarse_secondary",

@@ -1,5 +1,5 @@
 //! Convergence rates on Lamé's thick sphere (release mode: `cargo test --release --test
-//! convergence`; in debug builds the tests are ignored, they would take minutes).
+//! lame_sphere_rates`; in debug builds the tests are ignored, they would take minutes).
 //!
 //! Reference: Lamé's solution for a thick sphere under inner pressure (docs/theory.md section 9),
 //! inner radius 1, outer radius 2, p = 1, E = 1000, nu = 0.3, dead pressure load, symmetry on the
@@ -49,7 +49,7 @@ fn fitted_slope_recovers_a_known_rate() {
 #[test]
 #[cfg_attr(
     debug_assertions,
-    ignore = "release only: cargo test --release --test convergence"
+    ignore = "release only: cargo test --release --test lame_sphere_rates"
 )]
 fn lame_sphere_hex8_converges_at_rate_one() {
     let (slope, errors) = slope_for("hex8");
@@ -60,7 +60,7 @@ fn lame_sphere_hex8_converges_at_rate_one() {
 #[test]
 #[cfg_attr(
     debug_assertions,
-    ignore = "release only: cargo test --release --test convergence"
+    ignore = "release only: cargo test --release --test lame_sphere_rates"
 )]
 fn lame_sphere_hex20_converges_at_rate_two() {
     let (slope, errors) = slope_for("hex20");
@@ -71,7 +71,7 @@ fn lame_sphere_hex20_converges_at_rate_two() {
 #[test]
 #[cfg_attr(
     debug_assertions,
-    ignore = "release only: cargo test --release --test convergence"
+    ignore = "release only: cargo test --release --test lame_sphere_rates"
 )]
 fn lame_sphere_hex27_converges_at_rate_two() {
     let (slope, errors) = slope_for("hex27");

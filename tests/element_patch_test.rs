@@ -12,37 +12,21 @@
 
 mod common;
 
-const G: &str = "[[0.01, 0.002, -0.003], [0.004, -0.02, 0.001], [0.0, 0.003, 0.015]]";
+use common::UNIFORM_STRAIN_GRADIENT as G;
+
+/// A larger gradient, for the finite deformation of the Neo-Hookean patch.
 const G_LARGE: &str = "[[0.1, 0.02, -0.03], [0.04, -0.2, 0.01], [0.0, 0.03, 0.15]]";
 
+/// The 3 x 3 x 3 box of `element`, distorted, of `model` (E = 200, nu = 0.3), with u = G X
+/// (`gradient` = G) on its whole boundary, in 2 steps.
 fn patch_case(element: &str, model: &str, gradient: &str) -> String {
-    let mut s = format!(
-        r#"
-[[mesh]]
-body = "b"
-generator = "box"
-element = "{element}"
-divisions = [3, 3, 3]
-lo = [0.0, 0.0, 0.0]
-hi = [1.0, 1.2, 0.9]
-distort = 0.2
-[[material]]
-model = "{model}"
-young = 200.0
-poisson = 0.3
-[steps]
-count = 2
-[verification]
-kind = "uniform_strain"
-gradient = {gradient}
-"#
+    let mesh = common::box_mesh("b", element, [3, 3, 3], [0.0; 3], [1.0, 1.2, 0.9]);
+    let material = common::material(model, 200.0, 0.3);
+    let check = common::uniform_strain_check(
+        gradient,
+        &["b.xmin", "b.xmax", "b.ymin", "b.ymax", "b.zmin", "b.zmax"],
     );
-    for side in ["xmin", "xmax", "ymin", "ymax", "zmin", "zmax"] {
-        s.push_str(&format!(
-            "[[dirichlet]]\nset = \"b.{side}\"\ncomponents = [\"x\", \"y\", \"z\"]\ngradient = {gradient}\n"
-        ));
-    }
-    s
+    format!("\n{mesh}distort = 0.2\n{material}[steps]\ncount = 2\n{check}")
 }
 
 fn check_patch(element: &str, model: &str, gradient: &str) {

@@ -1,0 +1,93 @@
+//! What a run sets up in PETSc around its solves: the solver's phases as PETSc log stages, a
+//! singular tangent (an under-constrained body) reported, and the rigid body modes given to
+//! algebraic multigrid.
+
+mod common;
+
+/// `-log_view` shows the solver's phases as PETSc log stages.
+#[test]
+fn phases_are_petsc_log_stages() {
+    let case = common::write_case("log_stages", &common::column_case(""));
+    let (_, stdout) = common::run_case(&case, 1, &["-q", "-log_view"]);
+    for stage in ["setup", "assembly", "solve", "output"] {
+        assert!(
+            stdout
+                .lines()
+                .any(|l| l.trim_start().starts_with(&format!("{}:", stage))
+                    || l.contains(&format!(": {stage}"))),
+            "stage {stage} missing from -log_view"
+        );
+    }
+}
+
+/// A box held only along x on one face can translate in y and z and rotate about x: the
+/// singular tangent is detected (MUMPS null pivots) and reported, on 1 and 2 ranks, instead of
+/// "converging" to an arbitrary rigid shift.
+#[test]
+fn an_under_constrained_body_is_reported() {
+    let toml = common::column_case("").replace(
+        "[[dirichlet]]\nset = \"c.zmin\"\ncomponents = [\"x\", \"y\", \"z\"]",
+        "[[dirichlet]]\nset = \"c.zmin\"\ncomponents = [\"z\"]\n[[pressure]]\nset = \"c.zmax\"\nvalue = 1.0",
+    );
+    assert!(toml.contains("components = [\"z\"]"));
+    let case = common::write_case("under_constrained", &toml);
+    for ranks in [1, 2] {
+        let out_dir = case.parent().unwrap().join(format!("out{ranks}"));
+        let out = common::run_raw(&case, ranks, &out_dir, &["-q"]);
+        assert!(!out.status.success());
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let errors: Vec<&str> = stderr
+            .lines()
+            .filter(|l| l.starts_with("mortar: error:"))
+            .collect();
+        assert_eq!(errors.len(), 1, "{ranks} ranks: {stderr}");
+        assert!(errors[0].contains("singular"), "{}", errors[0]);
+        // The summary says the same (not `message: null`, as if still running).
+        let s = common::summary(&out_dir);
+        let message = s["message"].as_str().unwrap_or_default();
+        assert_eq!(format!("mortar: error: {message}"), errors[0], "{s}");
+    }
+}
+
+/// Algebraic multigrid gets the rigid body modes (`MatSetNearNullSpace`): a Hex8 cantilever
+/// 20 x 2 x 2 under a follower pressure, 2 load steps, GMRES with GAMG to 1e-8. Without the
+/// modes the linear solves hit their cap (10 000 iterations) and the steps are cut. Bound: at
+/// most 1 000 linear iterations in all, no cut, and the displacements of the direct solve to
+/// 1e-6, on 1 and 2 ranks.
+#[test]
+fn algebraic_multigrid_gets_the_rigid_body_modes() {
+    let toml = common::cantilever_case("hex8", [20, 2, 2], 2);
+    let case = common::write_case("amg_rigid_modes", &toml);
+    let (direct, _) = common::run_case(&case, 1, &["-q"]);
+    let reference = common::displacements(&direct);
+    let amg = [
+        "-q",
+        "-ksp_type",
+        "gmres",
+        "-pc_type",
+        "gamg",
+        "-ksp_rtol",
+        "1e-8",
+    ];
+    for ranks in [1, 2] {
+        let (out, _) = common::run_case(&case, ranks, &amg);
+        let steps = common::summary(&out)["steps"].as_array().unwrap().clone();
+        assert_eq!(steps.len(), 2, "{ranks} rank(s): steps were cut");
+        let history = common::History::read(&out);
+        let k = history.column("linear_its");
+        let linear: u64 = history
+            .lines
+            .iter()
+            .map(|l| l.split(',').nth(k).unwrap().parse::<u64>().unwrap())
+            .sum();
+        assert!(
+            linear <= 1000,
+            "{ranks} rank(s): {linear} linear iterations"
+        );
+        let diff = common::max_rel_difference(&common::displacements(&out), &reference);
+        assert!(
+            diff < 1e-6,
+            "{ranks} rank(s): {diff:e} from the direct solve"
+        );
+    }
+}
