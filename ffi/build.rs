@@ -1,5 +1,6 @@
 //! Generates the raw PETSc bindings with bindgen against Debian's PETSc headers (found through
-//! pkg-config) and compiles the C shim. See shared/design/STACK.md for why each option is here.
+//! pkg-config) and compiles the C shim. See docs/guide.md, "System set-up",
+//! for the PETSc this expects; the comments below say why each option is here.
 
 use std::env;
 use std::path::PathBuf;
