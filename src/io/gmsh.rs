@@ -640,57 +640,54 @@ mod tests {
             .join(name)
     }
 
-    /// Gmsh reference coordinates (from the Gmsh manual's node ordering figures), not derived
-    /// from the permutations above.
+    /// Gmsh reference coordinates, not derived from the permutations above: the corners (the
+    /// same in both conventions), then the mid-edge nodes of Gmsh's edge lists and the hex27
+    /// face and centre nodes in Gmsh's order (the Gmsh manual's node ordering figures, as in
+    /// the module documentation).
     fn gmsh_reference(kind: ElementType) -> Vec<[f64; 3]> {
-        let hex27: Vec<[f64; 3]> = vec![
-            [-1.0, -1.0, -1.0],
-            [1.0, -1.0, -1.0],
-            [1.0, 1.0, -1.0],
-            [-1.0, 1.0, -1.0],
-            [-1.0, -1.0, 1.0],
-            [1.0, -1.0, 1.0],
-            [1.0, 1.0, 1.0],
-            [-1.0, 1.0, 1.0],
-            [0.0, -1.0, -1.0],
-            [-1.0, 0.0, -1.0],
-            [-1.0, -1.0, 0.0],
-            [1.0, 0.0, -1.0],
-            [1.0, -1.0, 0.0],
-            [0.0, 1.0, -1.0],
-            [1.0, 1.0, 0.0],
-            [-1.0, 1.0, 0.0],
-            [0.0, -1.0, 1.0],
-            [-1.0, 0.0, 1.0],
-            [1.0, 0.0, 1.0],
-            [0.0, 1.0, 1.0],
-            [0.0, 0.0, -1.0],
-            [0.0, -1.0, 0.0],
-            [-1.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, 0.0, 1.0],
-            [0.0, 0.0, 0.0],
-        ];
-        let tet10: Vec<[f64; 3]> = vec![
-            [0.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, 0.0, 1.0],
-            [0.5, 0.0, 0.0],
-            [0.5, 0.5, 0.0],
-            [0.0, 0.5, 0.0],
-            [0.0, 0.0, 0.5],
-            [0.0, 0.5, 0.5],
-            [0.5, 0.0, 0.5],
-        ];
-        match kind {
-            ElementType::Hex8 => hex27[..8].to_vec(),
-            ElementType::Hex20 => hex27[..20].to_vec(),
-            ElementType::Hex27 => hex27,
-            ElementType::Tet4 => tet10[..4].to_vec(),
-            ElementType::Tet10 => tet10,
+        let (corners, edges): (_, Vec<[usize; 2]>) = if kind.is_hex() {
+            let edges = [
+                [0, 1],
+                [0, 3],
+                [0, 4],
+                [1, 2],
+                [1, 5],
+                [2, 3],
+                [2, 6],
+                [3, 7],
+                [4, 5],
+            ];
+            let last = [[4, 7], [5, 6], [6, 7]];
+            (
+                ElementType::Hex8.node_coords(),
+                [&edges[..], &last].concat(),
+            )
+        } else {
+            let edges = [[0, 1], [1, 2], [2, 0], [0, 3], [2, 3], [1, 3]];
+            (ElementType::Tet4.node_coords(), edges.to_vec())
+        };
+        let mut x = corners.clone();
+        for [a, b] in edges {
+            x.push(std::array::from_fn(|d| {
+                0.5 * (corners[a][d] + corners[b][d])
+            }));
         }
+        // Faces zeta = -1, eta = -1, xi = -1, xi = +1, eta = +1, zeta = +1, then the centre.
+        for (axis, side) in [
+            (2, -1.0),
+            (1, -1.0),
+            (0, -1.0),
+            (0, 1.0),
+            (1, 1.0),
+            (2, 1.0),
+        ] {
+            let mut centre = [0.0; 3];
+            centre[axis] = side;
+            x.push(centre);
+        }
+        x.push([0.0; 3]);
+        x.truncate(kind.num_nodes());
+        x
     }
 
     #[test]
