@@ -573,13 +573,9 @@ pub struct VerificationSpec {
 }
 
 impl CaseFile {
-    /// Reads and parses a case file; errors name the file and the offending key.
-    pub fn read(path: &Path) -> Result<CaseFile> {
-        CaseFile::read_edited(path, |_| Ok(()))
-    }
-
     /// Reads a case file, lets `edit` change its TOML table (a study's variant: another
-    /// refinement, another scheme), then parses it; errors name the file and the key.
+    /// refinement, another scheme; nothing for a plain read), then parses it; errors name the
+    /// file and the key.
     pub fn read_edited(
         path: &Path,
         edit: impl FnOnce(&mut toml::Table) -> std::result::Result<(), String>,
