@@ -172,17 +172,20 @@ impl Part<'_> {
         })
     }
 
+    /// `v` when `ok`, else the message that parameter `name` (= `v`) must be `what`.
+    fn must_be(&self, name: &str, v: f64, ok: bool, what: &str) -> Result<f64, String> {
+        if ok {
+            Ok(v)
+        } else {
+            Err(format!("{}.{name} = {v}: must be {what}", self.key))
+        }
+    }
+
     /// A required length: positive and at most `MAX_MAGNITUDE`.
     fn length(&self, v: Option<f64>, name: &str) -> Result<f64, String> {
         let v = self.need(v, name)?;
-        if v > 0.0 && within_bounds(v) {
-            Ok(v)
-        } else {
-            Err(format!(
-                "{}.{name} = {v}: must be > 0 and at most {MAX_MAGNITUDE:e}",
-                self.key
-            ))
-        }
+        let what = format!("> 0 and at most {MAX_MAGNITUDE:e}");
+        self.must_be(name, v, v > 0.0 && within_bounds(v), &what)
     }
 
     /// The element type.
@@ -221,6 +224,7 @@ impl Part<'_> {
         Ok((nc, nr))
     }
 
+    /// The box: `lo` below `hi`, gradings within bounds, zones inside the box on graded axes.
     fn box_generator(&self) -> Result<Generator, String> {
         let (p, key) = (self.p, self.key);
         let lo = p.lo.ok_or_else(|| format!("{key}.lo is required"))?;
@@ -261,6 +265,7 @@ impl Part<'_> {
         }))
     }
 
+    /// The beam: positive lengths.
     fn beam_generator(&self) -> Result<Generator, String> {
         let (element, divisions) = (self.element()?, self.divisions()?);
         let length = self.length(self.p.length, "length")?;
@@ -271,6 +276,7 @@ impl Part<'_> {
         }))
     }
 
+    /// The thick sphere octant: `0 < inner_radius < outer_radius`.
     fn sphere_octant_generator(&self) -> Result<Generator, String> {
         let a = self.length(self.p.inner_radius, "inner_radius")?;
         let b = self.length(self.p.outer_radius, "outer_radius")?;
@@ -290,16 +296,12 @@ impl Part<'_> {
     /// A hemisphere grading (default 1): in `[1, MAX_GRADING]`.
     fn hemisphere_grading(&self, v: Option<f64>, name: &str) -> Result<f64, String> {
         let g = v.unwrap_or(1.0);
-        if (1.0..=MAX_GRADING).contains(&g) {
-            Ok(g)
-        } else {
-            Err(format!(
-                "{}.{name} = {g}: must be in [1, {MAX_GRADING:e}]",
-                self.key
-            ))
-        }
+        let what = format!("in [1, {MAX_GRADING:e}]");
+        self.must_be(name, g, (1.0..=MAX_GRADING).contains(&g), &what)
     }
 
+    /// The quarter hemisphere: hexahedra, gradings within bounds, a pole zone only with a pole
+    /// grading and shorter than 0.9 of the quarter meridian.
     fn hemisphere_generator(&self) -> Result<Generator, String> {
         let (p, key) = (self.p, self.key);
         let r = self.length(p.radius, "radius")?;
