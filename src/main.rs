@@ -205,13 +205,13 @@ fn execute(cli: Cli, program: String) -> Result<()> {
             quiet,
             no_figure,
             petsc,
-        } => run_command(&case, out, quiet, !no_figure, program, petsc),
+        } => run_command(&case, !no_figure, Launch::new(out, quiet, program, petsc)),
         Command::Study {
             study,
             out,
             quiet,
             petsc,
-        } => study_command(&study, out, quiet, program, petsc),
+        } => study_command(&study, Launch::new(out, quiet, program, petsc)),
         Command::Scaling { logs, out } => {
             let scaling = mortar::scaling::Scaling::read(&logs)?;
             let out = out.unwrap_or_else(|| PathBuf::from("out/scaling"));
@@ -231,6 +231,62 @@ fn execute(cli: Cli, program: String) -> Result<()> {
     }
 }
 
+/// The options `run` and `study` share.
+struct Launch {
+    /// Output folder; default: `out/<name>` of the scene or study.
+    out: Option<PathBuf>,
+    quiet: bool,
+    /// The program's name and the PETSc options of the command line.
+    program: String,
+    petsc_options: Vec<String>,
+}
+
+impl Launch {
+    fn new(out: Option<PathBuf>, quiet: bool, program: String, petsc: Vec<String>) -> Launch {
+        Launch {
+            out,
+            quiet,
+            program,
+            petsc_options: petsc,
+        }
+    }
+}
+
+/// What `run` and `study` start from: a scene or a study.
+trait Input {
+    /// Names the default output folder.
+    fn name(&self) -> &str;
+    /// The PETSc options file, if any.
+    fn petsc_options(&self) -> Option<&Path>;
+}
+
+impl Input for Scene {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn petsc_options(&self) -> Option<&Path> {
+        self.petsc_options.as_deref()
+    }
+}
+
+impl Input for Study {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn petsc_options(&self) -> Option<&Path> {
+        self.petsc_options.as_deref()
+    }
+}
+
+/// A started `run` or `study`: its input (a scene or a study) read on every rank, PETSc, the
+/// world, and where and how to write.
+struct Started<T> {
+    input: T,
+    petsc: Petsc,
+    world: SimpleCommunicator,
+    options: RunOptions,
+}
+
 /// `mortar run` under MPI, with the error policy of a parallel program:
 ///
 /// - MPI starts first, then every rank reads the case, and the ranks agree (one allreduce) on
@@ -243,71 +299,54 @@ fn execute(cli: Cli, program: String) -> Result<()> {
 /// With `output.figure` (and without `--no-figure`), the figure's study runs after the scene,
 /// into `<out>/figure/`, sharing its PETSc; the scene's expectations are checked after the
 /// scene, the study's after the study, and the study runs whatever the scene's verdict.
-fn run_command(
-    case: &Path,
-    out: Option<PathBuf>,
-    quiet: bool,
-    figure: bool,
-    program: String,
-    petsc_options: Vec<String>,
-) -> Result<()> {
-    let (scene, petsc, world) = start(
-        || Scene::load(case),
-        |s| s.petsc_options.as_deref(),
-        program,
-        petsc_options,
-    )?;
-    let (rank, size) = (world.rank(), world.size());
-    let out_dir = out.unwrap_or_else(|| default_out(&scene.name));
-    let figure_dir = out_dir.join("figure");
-    let result = run(&scene, &petsc, &RunOptions { out_dir, quiet }).and_then(|summary| {
-        let scene_verdict = check_expectations(&world, &scene.expectations, &summary.metrics);
+fn run_command(case: &Path, figure: bool, launch: Launch) -> Result<()> {
+    let started = start(|| Scene::load(case), launch)?;
+    let (scene, petsc, world) = (&started.input, &started.petsc, &started.world);
+    let result = run(scene, petsc, &started.options).and_then(|summary| {
+        let scene_verdict = check_expectations(world, &scene.expectations, &summary.metrics);
         let figure_verdict = match scene.figure.as_deref().filter(|_| figure) {
-            Some(study) => {
-                if rank == 0 && !quiet {
-                    println!(
-                        "mortar: the scene's figure: {} -> {}",
-                        study.display(),
-                        figure_dir.display()
-                    );
-                }
-                let study = Study::load(study)?;
-                let report = study.run(
-                    &petsc,
-                    &RunOptions {
-                        out_dir: figure_dir,
-                        quiet,
-                    },
-                )?;
-                study_verdict(&world, &study, report)
-            }
+            Some(study) => run_figure(study, petsc, world, &started.options),
             None => Ok(()),
         };
         scene_verdict.and(figure_verdict)
     });
-    match result {
-        Ok(()) => {
-            if rank == 0 {
-                warn_unused_options(&petsc);
-            }
-            finalize(petsc, &world)
-        }
-        Err(e) => Err(abort_unless_collective(&world, e, rank, size)),
+    if result.is_ok() && world.rank() == 0 {
+        warn_unused_options(petsc);
     }
+    started.finish(result)
+}
+
+/// The scene's figure: its study run into `<out>/figure/` with the scene's PETSc, and the
+/// study's verdict.
+fn run_figure(
+    study: &Path,
+    petsc: &Petsc,
+    world: &SimpleCommunicator,
+    scene_options: &RunOptions,
+) -> Result<()> {
+    let options = RunOptions {
+        out_dir: scene_options.out_dir.join("figure"),
+        quiet: scene_options.quiet,
+    };
+    if world.rank() == 0 && !options.quiet {
+        println!(
+            "mortar: the scene's figure: {} -> {}",
+            study.display(),
+            options.out_dir.display()
+        );
+    }
+    let study = Study::load(study)?;
+    let report = study.run(petsc, &options)?;
+    study_verdict(world, &study, report)
 }
 
 /// Starts MPI, loads the input on every rank (agreeing on success: only the first failing rank
 /// reports), then starts PETSc with the input's options file.
-fn start<T>(
-    load: impl FnOnce() -> Result<T>,
-    options_file: impl Fn(&T) -> Option<&Path>,
-    program: String,
-    petsc_options: Vec<String>,
-) -> Result<(T, Petsc, SimpleCommunicator)> {
+fn start<T: Input>(load: impl FnOnce() -> Result<T>, launch: Launch) -> Result<Started<T>> {
     let universe = mortar::petsc::start_mpi()?;
     let world = universe.world();
     let (rank, size) = (world.rank(), world.size());
-    let loaded = check_petsc_args(&petsc_options).and_then(|()| load());
+    let loaded = check_petsc_args(&launch.petsc_options).and_then(|()| load());
     let first_failure = mortar::solver::lowest_rank_with(&world, loaded.is_err());
     let input = match loaded {
         Ok(s) if first_failure == size => s,
@@ -316,10 +355,14 @@ fn start<T>(
         }
         _ => return Err(report_once(&world, None)),
     };
-    let mut petsc_args = vec![program];
-    petsc_args.extend(petsc_options);
-    match Petsc::start(universe, &petsc_args, options_file(&input)) {
-        Ok(p) => {
+    let options = RunOptions {
+        out_dir: launch.out.unwrap_or_else(|| default_out(input.name())),
+        quiet: launch.quiet,
+    };
+    let mut petsc_args = vec![launch.program];
+    petsc_args.extend(launch.petsc_options);
+    match Petsc::start(universe, &petsc_args, input.petsc_options()) {
+        Ok(petsc) => {
             // After PETSc's start, which installs signal handlers of its own.
             if let Err(e) = mortar::interrupt::watch() {
                 if rank == 0 {
@@ -328,7 +371,12 @@ fn start<T>(
                     ));
                 }
             }
-            Ok((input, p, world))
+            Ok(Started {
+                input,
+                petsc,
+                world,
+                options,
+            })
         }
         Err(e) => Err(abort_unless_collective(&world, e, rank, size)),
     }
@@ -337,30 +385,31 @@ fn start<T>(
 /// `mortar study`, with the error policy of `mortar run` ([`run_command`]): every rank reads and
 /// validates the study, one PETSc serves every run, a failed run is recorded and the study goes
 /// on, and the study's error (a failed run, a collective error) is printed once by rank 0.
-fn study_command(
-    path: &Path,
-    out: Option<PathBuf>,
-    quiet: bool,
-    program: String,
-    petsc_options: Vec<String>,
-) -> Result<()> {
-    let (study, petsc, world) = start(
-        || Study::load(path),
-        |s| s.petsc_options.as_deref(),
-        program,
-        petsc_options,
-    )?;
-    let (rank, size) = (world.rank(), world.size());
-    let out_dir = out.unwrap_or_else(|| default_out(&study.name));
+fn study_command(path: &Path, launch: Launch) -> Result<()> {
+    let started = start(|| Study::load(path), launch)?;
+    let (study, petsc, world) = (&started.input, &started.petsc, &started.world);
     let result = study
-        .run(&petsc, &RunOptions { out_dir, quiet })
-        .and_then(|report| study_verdict(&world, &study, report));
-    if rank == 0 {
-        warn_unused_options(&petsc);
+        .run(petsc, &started.options)
+        .and_then(|report| study_verdict(world, study, report));
+    if world.rank() == 0 {
+        warn_unused_options(petsc);
     }
-    match result {
-        Ok(_) => finalize(petsc, &world),
-        Err(e) => Err(abort_unless_collective(&world, e, rank, size)),
+    started.finish(result)
+}
+
+impl<T> Started<T> {
+    /// Ends a run or study: PETSc and MPI after success, else the error by the policy of
+    /// [`run_command`].
+    fn finish(self, result: Result<()>) -> Result<()> {
+        match result {
+            Ok(()) => finalize(self.petsc, &self.world),
+            Err(e) => Err(abort_unless_collective(
+                &self.world,
+                e,
+                self.world.rank(),
+                self.world.size(),
+            )),
+        }
     }
 }
 

@@ -81,6 +81,51 @@ const TET_FACE_CORNERS: [[usize; 3]; 4] = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 
 /// Edges of the tetrahedron, in the order of the Tet10 mid-edge nodes 4..9.
 const TET_EDGES: [[usize; 2]; 6] = [[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]];
 
+/// Parametric positions of the Hex27 nodes in the VTK ordering (the first 8 are the Hex8 nodes,
+/// the first 20 the Hex20 nodes): node `a` sits at `s^a` with every `s^a_i` in `{-1, 0, 1}`.
+#[rustfmt::skip]
+pub(crate) const HEX_NODES: [[f64; 3]; 27] = [
+    // Corners: bottom (zeta = -1), then top.
+    [-1.0, -1.0, -1.0], [1.0, -1.0, -1.0], [1.0, 1.0, -1.0], [-1.0, 1.0, -1.0],
+    [-1.0, -1.0, 1.0], [1.0, -1.0, 1.0], [1.0, 1.0, 1.0], [-1.0, 1.0, 1.0],
+    // Mid-edge nodes: bottom edges 0-1, 1-2, 2-3, 3-0; top edges 4-5, 5-6, 6-7, 7-4; vertical
+    // edges 0-4, 1-5, 2-6, 3-7.
+    [0.0, -1.0, -1.0], [1.0, 0.0, -1.0], [0.0, 1.0, -1.0], [-1.0, 0.0, -1.0],
+    [0.0, -1.0, 1.0], [1.0, 0.0, 1.0], [0.0, 1.0, 1.0], [-1.0, 0.0, 1.0],
+    [-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0],
+    // Face centres xi = -1, +1, eta = -1, +1, zeta = -1, +1; the centre.
+    [-1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 1.0, 0.0],
+    [0.0, 0.0, -1.0], [0.0, 0.0, 1.0], [0.0, 0.0, 0.0],
+];
+
+/// Parametric positions of the Tet10 nodes (the first 4 are the Tet4 nodes).
+#[rustfmt::skip]
+pub(crate) const TET_NODES: [[f64; 3]; 10] = [
+    // Corners.
+    [0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0],
+    // Mid-edge nodes of 0-1, 1-2, 2-0, 0-3, 1-3, 2-3 (`TET_EDGES`).
+    [0.5, 0.0, 0.0], [0.5, 0.5, 0.0], [0.0, 0.5, 0.0],
+    [0.0, 0.0, 0.5], [0.5, 0.0, 0.5], [0.0, 0.5, 0.5],
+];
+
+/// Parametric positions of the Quad9 nodes (the first 4 are the Quad4 nodes, the first 8 the
+/// Quad8 nodes).
+#[rustfmt::skip]
+pub(crate) const QUAD_NODES: [[f64; 2]; 9] = [
+    // Corners; mid-edge nodes of 0-1, 1-2, 2-3, 3-0; the centre.
+    [-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0],
+    [0.0, -1.0], [1.0, 0.0], [0.0, 1.0], [-1.0, 0.0],
+    [0.0, 0.0],
+];
+
+/// Parametric positions of the Tri6 nodes (the first 3 are the Tri3 nodes).
+#[rustfmt::skip]
+pub(crate) const TRI_NODES: [[f64; 2]; 6] = [
+    // Corners; mid-edge nodes of 0-1, 1-2, 2-0.
+    [0.0, 0.0], [1.0, 0.0], [0.0, 1.0],
+    [0.5, 0.0], [0.5, 0.5], [0.0, 0.5],
+];
+
 impl ElementType {
     /// All element types, for tests and tables.
     pub const ALL: [ElementType; 5] = [
@@ -217,51 +262,14 @@ impl ElementType {
         self.num_corners() + k
     }
 
-    /// Parametric coordinates of every node.
+    /// Parametric coordinates of every node (a prefix of the table `HEX_NODES` or `TET_NODES`).
     pub fn node_coords(self) -> Vec<[f64; 3]> {
-        let corners: Vec<[f64; 3]> = if self.is_hex() {
-            vec![
-                [-1.0, -1.0, -1.0],
-                [1.0, -1.0, -1.0],
-                [1.0, 1.0, -1.0],
-                [-1.0, 1.0, -1.0],
-                [-1.0, -1.0, 1.0],
-                [1.0, -1.0, 1.0],
-                [1.0, 1.0, 1.0],
-                [-1.0, 1.0, 1.0],
-            ]
+        let table: &[[f64; 3]] = if self.is_hex() {
+            &HEX_NODES
         } else {
-            vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [0.0, 0.0, 1.0],
-            ]
+            &TET_NODES
         };
-        let mut xs = corners.clone();
-        if self.order() == 2 {
-            for e in self.edges() {
-                let (a, b) = (corners[e[0]], corners[e[1]]);
-                xs.push([
-                    0.5 * (a[0] + b[0]),
-                    0.5 * (a[1] + b[1]),
-                    0.5 * (a[2] + b[2]),
-                ]);
-            }
-        }
-        if self == ElementType::Hex27 {
-            for f in HEX_FACE_CORNERS {
-                let mut c = [0.0; 3];
-                for &n in &f {
-                    for d in 0..3 {
-                        c[d] += 0.25 * corners[n][d];
-                    }
-                }
-                xs.push(c);
-            }
-            xs.push([0.0, 0.0, 0.0]);
-        }
-        xs
+        table[..self.num_nodes()].to_vec()
     }
 }
 
@@ -322,31 +330,53 @@ impl FaceType {
         }
     }
 
-    /// Parametric coordinates of every node.
+    /// Parametric coordinates of every node (a prefix of the table `QUAD_NODES` or `TRI_NODES`).
     pub fn node_coords(self) -> Vec<[f64; 2]> {
-        let corners: Vec<[f64; 2]> = if self.is_quad() {
-            vec![[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]]
+        let table: &[[f64; 2]] = if self.is_quad() {
+            &QUAD_NODES
         } else {
-            vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]
+            &TRI_NODES
         };
-        let nc = corners.len();
-        let mut xs = corners.clone();
-        if matches!(self, FaceType::Quad8 | FaceType::Quad9 | FaceType::Tri6) {
-            for k in 0..nc {
-                let (a, b) = (corners[k], corners[(k + 1) % nc]);
-                xs.push([0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])]);
-            }
-        }
-        if self == FaceType::Quad9 {
-            xs.push([0.0, 0.0]);
-        }
-        xs
+        table[..self.num_nodes()].to_vec()
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The node tables follow the topology: every mid-edge node halfway between its edge's
+    /// corners, every Hex27 face centre at the mean of its face's corners, the Hex27 and Quad9
+    /// centres at the middle of the parent domain.
+    #[test]
+    fn node_tables_follow_the_topology() {
+        for et in ElementType::ALL.into_iter().filter(|t| t.order() == 2) {
+            let x = et.node_coords();
+            for (k, &[a, b]) in et.edges().iter().enumerate() {
+                let mid: [f64; 3] = std::array::from_fn(|d| 0.5 * (x[a][d] + x[b][d]));
+                assert_eq!(x[et.num_corners() + k], mid, "{et:?} edge {k}");
+            }
+        }
+        let x = ElementType::Hex27.node_coords();
+        for (f, corners) in HEX_FACE_CORNERS.iter().enumerate() {
+            let centre: [f64; 3] =
+                std::array::from_fn(|d| corners.iter().map(|&c| 0.25 * x[c][d]).sum());
+            assert_eq!(x[20 + f], centre, "Hex27 face {f}");
+        }
+        assert_eq!(x[26], [0.0; 3]);
+        for ft in [FaceType::Quad8, FaceType::Quad9, FaceType::Tri6] {
+            let (x, nc) = (ft.node_coords(), ft.num_corners());
+            for k in 0..nc {
+                let (a, b) = (x[k], x[(k + 1) % nc]);
+                assert_eq!(
+                    x[nc + k],
+                    [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])],
+                    "{ft:?}"
+                );
+            }
+        }
+        assert_eq!(FaceType::Quad9.node_coords()[8], [0.0; 2]);
+    }
 
     /// Each face's nodes, taken at their element parametric coordinates, lie on one parent face and
     /// the mid-edge nodes sit between their corners.

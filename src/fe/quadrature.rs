@@ -140,38 +140,31 @@ fn gauss_points_for_degree(degree: usize) -> usize {
     degree / 2 + 1
 }
 
+/// Tensor Gauss rule on `[-1, 1]^D` exact for degree `degree` in each variable: points and
+/// weights, the first coordinate running fastest.
+fn tensor_rule<const D: usize>(degree: usize) -> (Vec<[f64; D]>, Vec<f64>) {
+    let (x, w) = gauss_legendre(gauss_points_for_degree(degree));
+    let n = x.len();
+    let index = |t: usize, d: usize| t / n.pow(d as u32) % n;
+    (0..n.pow(D as u32))
+        .map(|t| {
+            let point = std::array::from_fn(|d| x[index(t, d)]);
+            let weight = (1..D).fold(w[index(t, 0)], |acc, d| acc * w[index(t, d)]);
+            (point, weight)
+        })
+        .unzip()
+}
+
 /// Tensor Gauss rule on `[-1, 1]^3` exact for degree `degree` in each variable.
 fn hex_tensor_rule(degree: usize) -> Rule3 {
-    let (x, w) = gauss_legendre(gauss_points_for_degree(degree));
-    let mut rule = Rule3 {
-        points: Vec::new(),
-        weights: Vec::new(),
-    };
-    for (k, wk) in x.iter().zip(&w) {
-        for (j, wj) in x.iter().zip(&w) {
-            for (i, wi) in x.iter().zip(&w) {
-                rule.points.push([*i, *j, *k]);
-                rule.weights.push(wi * wj * wk);
-            }
-        }
-    }
-    rule
+    let (points, weights) = tensor_rule(degree);
+    Rule3 { points, weights }
 }
 
 /// Tensor Gauss rule on `[-1, 1]^2` exact for degree `degree` in each variable.
 fn quad_tensor_rule(degree: usize) -> Rule2 {
-    let (x, w) = gauss_legendre(gauss_points_for_degree(degree));
-    let mut rule = Rule2 {
-        points: Vec::new(),
-        weights: Vec::new(),
-    };
-    for (j, wj) in x.iter().zip(&w) {
-        for (i, wi) in x.iter().zip(&w) {
-            rule.points.push([*i, *j]);
-            rule.weights.push(wi * wj);
-        }
-    }
-    rule
+    let (points, weights) = tensor_rule(degree);
+    Rule2 { points, weights }
 }
 
 /// One-point centroid rule on the unit tetrahedron (degree 1).
@@ -425,70 +418,68 @@ mod tests {
         (if a.is_multiple_of(2) { abs } else { 0.0 }, abs)
     }
 
-    /// `(exact integral, integral of |monomial|)` over the parent domain of a 3D element.
-    fn exact_3d(et: ElementType, e: [u32; 3]) -> (f64, f64) {
-        if et.is_hex() {
-            e.iter()
-                .map(|&a| interval_integral(a))
-                .fold((1.0, 1.0), |(v, m), (iv, im)| (v * iv, m * im))
-        } else {
-            let v = factorial(e[0]) * factorial(e[1]) * factorial(e[2])
-                / factorial(e[0] + e[1] + e[2] + 3);
-            (v, v)
-        }
-    }
-
-    fn exact_2d(ft: FaceType, e: [u32; 2]) -> (f64, f64) {
-        if ft.is_quad() {
-            let ((v0, m0), (v1, m1)) = (interval_integral(e[0]), interval_integral(e[1]));
-            (v0 * v1, m0 * m1)
-        } else {
-            let v = factorial(e[0]) * factorial(e[1]) / factorial(e[0] + e[1] + 2);
-            (v, v)
-        }
-    }
-
     fn pow(x: f64, a: u32) -> f64 {
         x.powi(a as i32)
     }
 
-    /// Relative error of the rule on the monomial `x^e0 y^e1 z^e2`.
-    fn error_3d(et: ElementType, rule: &Rule3, e: [u32; 3]) -> f64 {
-        let q: f64 = rule
-            .points
-            .iter()
-            .zip(&rule.weights)
-            .map(|(p, w)| w * pow(p[0], e[0]) * pow(p[1], e[1]) * pow(p[2], e[2]))
-            .sum();
-        let (exact, scale) = exact_3d(et, e);
-        (q - exact).abs() / scale
+    /// An element type (`D = 3`) or a face type (`D = 2`), as these tests see it: its parent
+    /// domain and its rules.
+    trait Domain<const D: usize>: Copy + std::fmt::Debug {
+        /// True for the tensor domain `[-1, 1]^D`, false for the unit simplex.
+        fn is_cube(self) -> bool;
+        /// The rule of `degree`: points and weights.
+        fn rule(self, degree: usize) -> (Vec<[f64; D]>, Vec<f64>);
+        /// `(exact integral, integral of |monomial|)` over the parent domain.
+        fn exact(self, e: [u32; D]) -> (f64, f64) {
+            if self.is_cube() {
+                e.iter()
+                    .map(|&a| interval_integral(a))
+                    .fold((1.0, 1.0), |(v, m), (iv, im)| (v * iv, m * im))
+            } else {
+                let total: u32 = e.iter().sum();
+                let v =
+                    e.iter().map(|&a| factorial(a)).product::<f64>() / factorial(total + D as u32);
+                (v, v)
+            }
+        }
     }
 
-    fn error_2d(ft: FaceType, rule: &Rule2, e: [u32; 2]) -> f64 {
-        let q: f64 = rule
-            .points
+    /// `Domain<$d>` for `$t`, whose tensor types answer `$cube`.
+    macro_rules! domain {
+        ($t:ty, $d:literal, $cube:ident) => {
+            impl Domain<$d> for $t {
+                fn is_cube(self) -> bool {
+                    self.$cube()
+                }
+                fn rule(self, degree: usize) -> (Vec<[f64; $d]>, Vec<f64>) {
+                    let r = self.quadrature(degree);
+                    (r.points, r.weights)
+                }
+            }
+        };
+    }
+    domain!(ElementType, 3, is_hex);
+    domain!(FaceType, 2, is_quad);
+
+    /// Relative error of the rule of `degree` on the monomial `x^e0 y^e1 (z^e2)`.
+    fn error<const D: usize>(p: impl Domain<D>, degree: usize, e: [u32; D]) -> f64 {
+        let (points, weights) = p.rule(degree);
+        let q: f64 = points
             .iter()
-            .zip(&rule.weights)
-            .map(|(p, w)| w * pow(p[0], e[0]) * pow(p[1], e[1]))
+            .zip(&weights)
+            .map(|(x, w)| (0..D).fold(*w, |acc, i| acc * pow(x[i], e[i])))
             .sum();
-        let (exact, scale) = exact_2d(ft, e);
+        let (exact, scale) = p.exact(e);
         (q - exact).abs() / scale
     }
 
     /// Largest relative error over all monomials of total degree exactly `k`.
-    fn max_error_3d(et: ElementType, rule: &Rule3, k: u32) -> f64 {
-        let mut err: f64 = 0.0;
-        for a in 0..=k {
-            for b in 0..=k - a {
-                err = err.max(error_3d(et, rule, [a, b, k - a - b]));
-            }
-        }
-        err
-    }
-
-    fn max_error_2d(ft: FaceType, rule: &Rule2, k: u32) -> f64 {
-        (0..=k)
-            .map(|a| error_2d(ft, rule, [a, k - a]))
+    fn max_error<const D: usize>(p: impl Domain<D>, degree: usize, k: u32) -> f64 {
+        let n = k + 1;
+        (0..n.pow(D as u32))
+            .map(|i| std::array::from_fn(|d| i / n.pow(d as u32) % n))
+            .filter(|e: &[u32; D]| e.iter().sum::<u32>() == k)
+            .map(|e| error(p, degree, e))
             .fold(0.0, f64::max)
     }
 
@@ -501,47 +492,37 @@ mod tests {
             .map_or(0, |k| k)
     }
 
-    /// Every element rule of degree 1..=10 integrates all monomials up to its degree exactly and is
-    /// exact to degree at most `degree + 1` (Gauss-type rules have odd degree), i.e. some monomial
-    /// of degree `degree + 1` or `degree + 2` is integrated wrongly.
-    #[test]
-    fn element_rules_have_the_requested_degree() {
-        for et in ElementType::ALL {
-            for degree in 1..=MAX_DEGREE {
-                let rule = et.quadrature(degree);
-                let d = degree as u32;
-                for k in 0..=d {
-                    let err = max_error_3d(et, &rule, k);
-                    assert!(
-                        err < EXACT_TOL,
-                        "{et:?} rule {degree}: degree {k} error {err}"
-                    );
-                }
-                let e = exactness(|k| max_error_3d(et, &rule, k), d + 2);
-                assert!(e <= d + 1, "{et:?} rule {degree} exact to {e}");
-                assert!(max_error_3d(et, &rule, e + 1) > INEXACT_TOL);
+    /// Every rule of degree 1..=10 integrates all monomials up to its degree exactly and is
+    /// exact to degree at most `degree + 1` (Gauss-type rules have odd degree), i.e. some
+    /// monomial of degree `degree + 1` or `degree + 2` is integrated wrongly.
+    fn assert_rules_have_their_degree<const D: usize>(p: impl Domain<D>) {
+        for degree in 1..=MAX_DEGREE {
+            let d = degree as u32;
+            for k in 0..=d {
+                let err = max_error(p, degree, k);
+                assert!(
+                    err < EXACT_TOL,
+                    "{p:?} rule {degree}: degree {k} error {err}"
+                );
             }
+            let e = exactness(|k| max_error(p, degree, k), d + 2);
+            assert!(e <= d + 1, "{p:?} rule {degree} exact to {e}");
+            assert!(max_error(p, degree, e + 1) > INEXACT_TOL);
         }
     }
 
     #[test]
+    fn element_rules_have_the_requested_degree() {
+        ElementType::ALL
+            .into_iter()
+            .for_each(assert_rules_have_their_degree);
+    }
+
+    #[test]
     fn face_rules_have_the_requested_degree() {
-        for ft in FaceType::ALL {
-            for degree in 1..=MAX_DEGREE {
-                let rule = ft.quadrature(degree);
-                let d = degree as u32;
-                for k in 0..=d {
-                    let err = max_error_2d(ft, &rule, k);
-                    assert!(
-                        err < EXACT_TOL,
-                        "{ft:?} rule {degree}: degree {k} error {err}"
-                    );
-                }
-                let e = exactness(|k| max_error_2d(ft, &rule, k), d + 2);
-                assert!(e <= d + 1, "{ft:?} rule {degree} exact to {e}");
-                assert!(max_error_2d(ft, &rule, e + 1) > INEXACT_TOL);
-            }
-        }
+        FaceType::ALL
+            .into_iter()
+            .for_each(assert_rules_have_their_degree);
     }
 
     /// Tensor rules of odd degree fail on `x^(degree + 1)`: a rule exact one degree beyond its
@@ -550,11 +531,35 @@ mod tests {
     fn tensor_rules_are_not_exact_one_degree_higher() {
         for degree in (1..=MAX_DEGREE).step_by(2) {
             let d = degree as u32 + 1;
-            let rule = ElementType::Hex8.quadrature(degree);
-            assert!(error_3d(ElementType::Hex8, &rule, [d, 0, 0]) > INEXACT_TOL);
-            assert!(error_3d(ElementType::Hex8, &rule, [0, 0, d]) > INEXACT_TOL);
-            let rule = FaceType::Quad4.quadrature(degree);
-            assert!(error_2d(FaceType::Quad4, &rule, [0, d]) > INEXACT_TOL);
+            assert!(error(ElementType::Hex8, degree, [d, 0, 0]) > INEXACT_TOL);
+            assert!(error(ElementType::Hex8, degree, [0, 0, d]) > INEXACT_TOL);
+            assert!(error(FaceType::Quad4, degree, [0, d]) > INEXACT_TOL);
+        }
+    }
+
+    /// The rule of `degree` has positive weights summing to the measure of the parent domain
+    /// and its points inside it.
+    fn assert_weights_positive_points_inside<const D: usize>(p: impl Domain<D>, degree: usize) {
+        let (points, weights) = p.rule(degree);
+        assert_eq!(points.len(), weights.len());
+        let measure = if p.is_cube() {
+            2f64.powi(D as i32)
+        } else {
+            1.0 / factorial(D as u32)
+        };
+        let sum: f64 = weights.iter().sum();
+        assert!(
+            (sum - measure).abs() < 1e-14 * measure,
+            "{p:?} {degree}: {sum}"
+        );
+        assert!(weights.iter().all(|&w| w > 0.0));
+        for x in &points {
+            let inside = if p.is_cube() {
+                x.iter().all(|t| t.abs() < 1.0)
+            } else {
+                x.iter().all(|&t| t > 0.0) && x.iter().sum::<f64>() < 1.0
+            };
+            assert!(inside, "{p:?} {degree}: {x:?}");
         }
     }
 
@@ -562,39 +567,10 @@ mod tests {
     fn weights_are_positive_points_inside_and_sum_to_the_volume() {
         for degree in 0..=MAX_DEGREE {
             for et in ElementType::ALL {
-                let rule = et.quadrature(degree);
-                assert_eq!(rule.points.len(), rule.weights.len());
-                let volume = if et.is_hex() { 8.0 } else { 1.0 / 6.0 };
-                let sum: f64 = rule.weights.iter().sum();
-                assert!(
-                    (sum - volume).abs() < 1e-14 * volume,
-                    "{et:?} {degree}: {sum}"
-                );
-                assert!(rule.weights.iter().all(|&w| w > 0.0));
-                for p in &rule.points {
-                    let inside = if et.is_hex() {
-                        p.iter().all(|t| t.abs() < 1.0)
-                    } else {
-                        p.iter().all(|&t| t > 0.0) && p.iter().sum::<f64>() < 1.0
-                    };
-                    assert!(inside, "{et:?} {degree}: {p:?}");
-                }
+                assert_weights_positive_points_inside(et, degree);
             }
             for ft in FaceType::ALL {
-                let rule = ft.quadrature(degree);
-                assert_eq!(rule.points.len(), rule.weights.len());
-                let area = if ft.is_quad() { 4.0 } else { 0.5 };
-                let sum: f64 = rule.weights.iter().sum();
-                assert!((sum - area).abs() < 1e-14 * area, "{ft:?} {degree}: {sum}");
-                assert!(rule.weights.iter().all(|&w| w > 0.0));
-                for p in &rule.points {
-                    let inside = if ft.is_quad() {
-                        p.iter().all(|t| t.abs() < 1.0)
-                    } else {
-                        p.iter().all(|&t| t > 0.0) && p.iter().sum::<f64>() < 1.0
-                    };
-                    assert!(inside, "{ft:?} {degree}: {p:?}");
-                }
+                assert_weights_positive_points_inside(ft, degree);
             }
         }
     }

@@ -317,19 +317,16 @@ pub struct InterfaceSpec {
     /// penetration gh_A of every pressed node; default 1e-6.
     pub uzawa_tol: Option<f64>,
     /// Contact with friction: augmentations also go on while the slip |dsh_A| of a sticking
-    /// node is above this fraction of h_A. Default 1e-3, from the Pareto front of
-    /// `cases/sliding_blocks/study_uzawa.toml` (one pass, Hex27): at most 4 augmentations per
-    /// step and the force curve within 7.5e-6 of a run at 1e-5; 1e-4 takes up to 10 per step
-    /// (6 steps above 5) for a curve within 1.4e-6, 30 % more time. With the default tangential
-    /// penalty a plain Uzawa update removes only part of a sticking node's slip (4.2e-4 h after
-    /// the first solve of a step, then 1.7e-4, 1.1e-4, 7.9e-5, and a factor 0.88 per
-    /// augmentation later), so much tighter tolerances exceed any sensible `uzawa_max`.
+    /// node is above this fraction of h_A. Default 1e-3, chosen with
+    /// `cases/sliding_blocks/study_uzawa.toml` (docs/performance.md). With the default
+    /// tangential penalty a plain Uzawa update removes only part of a sticking node's slip, so
+    /// much tighter tolerances exceed any sensible `uzawa_max`.
     pub uzawa_slip_tol: Option<f64>,
     /// At most this many augmentations per load step (0: plain penalty). Default 0 for two
     /// passes: on dissimilar meshes the two passes' weak conditions cannot both hold exactly,
     /// so augmenting them drives a tied interface into locking and never meets a contact
-    /// tolerance (measured on the sliding blocks: the cap of 10 hit in every step); two passes
-    /// are a penalty method. One pass: 50 tied, 10 contact. At most 1000.
+    /// tolerance (docs/performance.md); two passes are a penalty method. One pass: 50 tied, 10
+    /// contact. At most 1000.
     pub uzawa_max: Option<usize>,
     /// Degree of the triangle rule on each integration pallet. Default 8 for quadratic faces,
     /// 4 for linear ones. Up to degree 8 the rules are Dunavant's symmetric ones (6, 7, 12 and
@@ -342,12 +339,8 @@ pub struct InterfaceSpec {
     /// the same integral where the rule is exact (affine face pairs, the patch tests) at about
     /// half the points on rectangular overlaps. The split can jump where the overlap gains or
     /// loses a vertex, and with it the quadrature error on curved faces
-    /// (`contact::mortar::clip`, "Pallets"). Measured against the centroid split (the scenes'
-    /// studies run both): the sliding blocks 30 % less mortar integration, the force curve
-    /// 1.8e-11 from degree 10's (1.3e-13); the Hertz scene the same errors to 1e-12, 42 Newton
-    /// iterations either way, 8-25 % less time; the bending scene the same tip to 1e-9, 87
-    /// iterations either way, 13 % less time. These three scenes use it; on the tied sphere and
-    /// the contact patch the linear solve dominates and the time does not move.
+    /// (`contact::mortar::clip`, "Pallets"). The sliding blocks, Hertz and bending scenes use
+    /// it; docs/performance.md compares the two splits.
     pub pallets: Option<String>,
     /// Contact: Coulomb friction coefficient mu >= 0. Default 0: frictionless, and then no
     /// friction work is done at all (no slip, no return map).
@@ -361,10 +354,9 @@ pub struct InterfaceSpec {
     /// Contact: tangential penalty factor alpha_T (eps_T = alpha_T E / h_A, the stiffness of
     /// sticking). Default 1: a sticking node is then about as stiff as the element layer under
     /// it. Much stiffer sticking makes full Newton steps jump over the small stick region of a
-    /// node and cycle between slip in opposite directions (measured on the sliding blocks:
-    /// alpha_T = 1 converges in at most 6 iterations per step, alpha_T = 3 and 10 fail at every
-    /// cut of the first step); the slip that a sticking node keeps under penalty is removed by
-    /// the Uzawa updates of one-pass interfaces. Must lie in [1e-6, 1e12].
+    /// node and cycle between slip in opposite directions (docs/performance.md); the slip that
+    /// a sticking node keeps under penalty is removed by the Uzawa updates of one-pass
+    /// interfaces. Must lie in [1e-6, 1e12].
     pub tangential_penalty: Option<f64>,
     /// Contact: after an augmentation whose worst violation is above a quarter of the previous
     /// one, both penalties are multiplied by this factor (>= 1). Default 1: no growth.
@@ -404,19 +396,14 @@ pub struct StepsSpec {
     /// iteration or a grown contact pattern, assemble the tangent as `"converged"` does.
     /// `"converged"`: the tangent assembled and factorized at the converged state of the last
     /// step, the consistent predictor (one more tangent assembly and factorization per step).
-    /// Read only with `predictor = true`. Measured (README.md, "The price of each choice"):
-    /// the sliding blocks 19 % faster (3.85 s against 4.77 s, 160 Newton iterations against
-    /// 161, the force curve within 3e-12), the bending scene 19 % and Hertz 5 % faster with the
-    /// same iterations, and every case of `ci/extremes` with the same outcome and penetration
-    /// in as many or fewer iterations.
+    /// Read only with `predictor = true`. Why `"last_newton"` is the default:
+    /// docs/performance.md.
     #[serde(default = "last_newton")]
     pub predictor_tangent: String,
     /// Frictional contact: start each step with a Newton solve (at most 6 iterations) in which
     /// every pressed node sticks, then release the Coulomb law from its solution. Default
-    /// false. Measured on the sliding blocks (Hex27, one pass) with the stiff sticking of
-    /// `tangential_penalty = 100`: with full Newton steps it made every step converge (without
-    /// it the first step failed at every cut) in at most 14 Newton iterations per step; on two
-    /// passes it cost many cut steps. With the default soft sticking it is not needed.
+    /// false. It helps stiff sticking (a large `tangential_penalty`) converge with full Newton
+    /// steps; with the default soft sticking it is not needed (docs/performance.md).
     #[serde(default)]
     pub stick_predictor: bool,
     /// What happens when a step's Newton solve does not converge and no cut is left (a failed
@@ -573,13 +560,9 @@ pub struct VerificationSpec {
 }
 
 impl CaseFile {
-    /// Reads and parses a case file; errors name the file and the offending key.
-    pub fn read(path: &Path) -> Result<CaseFile> {
-        CaseFile::read_edited(path, |_| Ok(()))
-    }
-
     /// Reads a case file, lets `edit` change its TOML table (a study's variant: another
-    /// refinement, another scheme), then parses it; errors name the file and the key.
+    /// refinement, another scheme; nothing for a plain read), then parses it; errors name the
+    /// file and the key.
     pub fn read_edited(
         path: &Path,
         edit: impl FnOnce(&mut toml::Table) -> std::result::Result<(), String>,

@@ -285,21 +285,33 @@ mod tests {
         m.iter().fold(0.0f64, |a, &x| a.max(x.abs()))
     }
 
+    /// Central differences (step 1e-6) of `g` in each entry `(k, l)` of `f`:
+    /// `visit(k, l, dg/dF_kl)`.
+    fn central_differences<T>(
+        f: &Matrix3<f64>,
+        g: impl Fn(&Matrix3<f64>) -> T,
+        mut visit: impl FnMut(usize, usize, T),
+    ) where
+        T: std::ops::Sub<Output = T> + std::ops::Div<f64, Output = T>,
+    {
+        let h = 1e-6;
+        for k in 0..3 {
+            for l in 0..3 {
+                let (mut fp, mut fm) = (*f, *f);
+                fp[(k, l)] += h;
+                fm[(k, l)] -= h;
+                visit(k, l, (g(&fp) - g(&fm)) / (2.0 * h));
+            }
+        }
+    }
+
     #[test]
     fn piola_matches_fd_of_energy() {
         for m in MATS {
             for f in [sample_f(), Matrix3::identity(), sample_f().transpose()] {
                 let (p, _) = m.first_piola(&f).unwrap();
-                let h = 1e-6;
                 let mut p_fd = Matrix3::zeros();
-                for k in 0..3 {
-                    for l in 0..3 {
-                        let (mut fp, mut fm) = (f, f);
-                        fp[(k, l)] += h;
-                        fm[(k, l)] -= h;
-                        p_fd[(k, l)] = (m.strain_energy(&fp) - m.strain_energy(&fm)) / (2.0 * h);
-                    }
-                }
+                central_differences(&f, |f| m.strain_energy(f), |k, l, d| p_fd[(k, l)] = d);
                 let scale = max_abs(&p).max(m.lame().1);
                 assert!(
                     max_abs(&(p - p_fd)) < 1e-6 * scale,
@@ -314,22 +326,15 @@ mod tests {
         for m in MATS {
             let f = sample_f();
             let (_, a) = m.first_piola(&f).unwrap();
-            let h = 1e-6;
             let mut a_fd = Tangent::zeros();
-            for k in 0..3 {
-                for l in 0..3 {
-                    let (mut fp, mut fm) = (f, f);
-                    fp[(k, l)] += h;
-                    fm[(k, l)] -= h;
-                    let dp =
-                        (m.first_piola(&fp).unwrap().0 - m.first_piola(&fm).unwrap().0) / (2.0 * h);
-                    for i in 0..3 {
-                        for j in 0..3 {
-                            a_fd[(3 * i + j, 3 * k + l)] = dp[(i, j)];
-                        }
+            let piola = |f: &Matrix3<f64>| m.first_piola(f).unwrap().0;
+            central_differences(&f, piola, |k, l, dp| {
+                for i in 0..3 {
+                    for j in 0..3 {
+                        a_fd[(3 * i + j, 3 * k + l)] = dp[(i, j)];
                     }
                 }
-            }
+            });
             assert!(
                 max_abs(&(a - a_fd)) < 1e-6 * max_abs(&a),
                 "{m:?}: A = {a}, FD = {a_fd}"

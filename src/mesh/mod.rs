@@ -2,10 +2,15 @@
 //!
 //! A mesh is held whole on every rank (it is small next to the matrices: the partition decides
 //! which rank assembles which element and owns which matrix rows; see `crate::dofs`). Generators
-//! (`generate`) and the Gmsh reader (`crate::io::gmsh`) both produce this type.
+//! ([`generate`]) and the Gmsh reader (`crate::io::gmsh`) both produce this type; parts are
+//! joined by [`Mesh::merge`] ([`merge`]) and validated by [`Mesh::check`] ([`check`]).
 
+pub mod check;
 pub mod generate;
+pub mod merge;
 pub mod partition;
+#[cfg(test)]
+mod test_support;
 
 use std::collections::BTreeMap;
 
@@ -101,36 +106,12 @@ impl Mesh {
 
     /// A node set by name, or an error naming the set and what exists.
     pub fn node_set(&self, name: &str) -> Result<&[usize]> {
-        self.node_sets
-            .get(name)
-            .map(|v| v.as_slice())
-            .ok_or_else(|| {
-                Error::Mesh(format!(
-                    "no node set '{name}' (have: {})",
-                    self.node_sets
-                        .keys()
-                        .cloned()
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ))
-            })
+        named_set(&self.node_sets, "node", name)
     }
 
     /// A face set by name, or an error naming the set and what exists.
     pub fn face_set(&self, name: &str) -> Result<&[FaceRef]> {
-        self.face_sets
-            .get(name)
-            .map(|v| v.as_slice())
-            .ok_or_else(|| {
-                Error::Mesh(format!(
-                    "no face set '{name}' (have: {})",
-                    self.face_sets
-                        .keys()
-                        .cloned()
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ))
-            })
+        named_set(&self.face_sets, "face", name)
     }
 
     /// The nodes of a node set, or of a face set of that name (all nodes of its faces), sorted.
@@ -153,4 +134,15 @@ impl Mesh {
             have.join(", ")
         )))
     }
+}
+
+/// The set `name` of `sets`, or an error naming the set, its kind (`what`: "node", "face") and
+/// the sets there are.
+fn named_set<'a, T>(sets: &'a BTreeMap<String, Vec<T>>, what: &str, name: &str) -> Result<&'a [T]> {
+    sets.get(name).map(|v| v.as_slice()).ok_or_else(|| {
+        Error::Mesh(format!(
+            "no {what} set '{name}' (have: {})",
+            sets.keys().cloned().collect::<Vec<_>>().join(", ")
+        ))
+    })
 }
