@@ -86,10 +86,9 @@
 //! Keeping the duals' operations keeps the kernel's results those of the dual formulation,
 //! whatever the conditioning; the test `float_level2_reproduces_the_dual_reference` checks it on
 //! generic pairs of every face type and scheme and on pairs of the bending scene
-//! (`cases/bending`). A node inside the touching band takes the stick tangent without traction
-//! (`contact::law::touching_friction`), so the round-off signs of touching gaps no longer pick
-//! friction states; what the bending scene showed with and without that is in
-//! docs/performance.md.
+//! (`cases/bending`). (The friction states do not follow those round-off signs: a node inside
+//! the touching band takes the stick tangent without traction,
+//! `contact::law::touching_friction`.)
 //!
 //! # Degenerate configurations
 //!

@@ -292,7 +292,7 @@ pub fn integrate_pair(
 mod tests {
     use super::*;
     use crate::contact::mortar::segments::traction_nodes;
-    use crate::contact::mortar::test_support::{settings, SCHEMES};
+    use crate::contact::mortar::test_support::{geom, max_difference, settings, SCHEMES};
     use crate::fe::face_normal;
     use crate::vec3::{cross, dot, normalized, Vec3};
 
@@ -425,14 +425,8 @@ mod tests {
                     continue;
                 }
                 let w = integrate_pair(
-                    &FaceGeom {
-                        kind: sec.kind,
-                        x: &xs,
-                    },
-                    &FaceGeom {
-                        kind: pri.kind,
-                        x: &xp,
-                    },
+                    &geom(sec.kind, &xs),
+                    &geom(pri.kind, &xp),
                     &opts,
                     &mut t.stats,
                 );
@@ -451,13 +445,6 @@ mod tests {
             }
         }
         t
-    }
-
-    fn max_difference(a: &[f64], b: &[f64]) -> f64 {
-        a.iter()
-            .zip(b)
-            .map(|(x, y)| (x - y).abs())
-            .fold(0.0, f64::max)
     }
 
     /// A tilted, sheared flat interface: `x = o + u a + v b`, area `|a x b|`.
@@ -611,24 +598,7 @@ mod tests {
             2 => area / 36.0,
             _ => area / 18.0,
         };
-        let opts = IntegrationOptions::for_faces(
-            TractionScheme::FaceShape,
-            FaceType::Quad4,
-            FaceType::Quad4,
-        );
-        let mut stats = RejectStats::default();
-        let w = integrate_pair(
-            &FaceGeom {
-                kind: FaceType::Quad4,
-                x: &sec_x,
-            },
-            &FaceGeom {
-                kind: FaceType::Quad4,
-                x: &pri_x,
-            },
-            &opts,
-            &mut stats,
-        );
+        let (w, stats) = integrate_quad4_with(TractionScheme::FaceShape, &sec_x, &pri_x);
         assert_eq!(w.n1.len(), 16);
         assert_eq!(w.n2.len(), 16);
         for &(k, b, v) in &w.n1 {
@@ -697,21 +667,20 @@ mod tests {
     }
 
     fn integrate_quad4(sec_x: &[Vec3], pri_x: &[Vec3]) -> (PairWeights, RejectStats) {
-        let opts = IntegrationOptions::for_faces(
-            TractionScheme::Corners,
-            FaceType::Quad4,
-            FaceType::Quad4,
-        );
+        integrate_quad4_with(TractionScheme::Corners, sec_x, pri_x)
+    }
+
+    /// A Quad4 pair integrated with `scheme`: finite weights, and the counts.
+    fn integrate_quad4_with(
+        scheme: TractionScheme,
+        sec_x: &[Vec3],
+        pri_x: &[Vec3],
+    ) -> (PairWeights, RejectStats) {
+        let opts = IntegrationOptions::for_faces(scheme, FaceType::Quad4, FaceType::Quad4);
         let mut stats = RejectStats::default();
         let w = integrate_pair(
-            &FaceGeom {
-                kind: FaceType::Quad4,
-                x: sec_x,
-            },
-            &FaceGeom {
-                kind: FaceType::Quad4,
-                x: pri_x,
-            },
+            &geom(FaceType::Quad4, sec_x),
+            &geom(FaceType::Quad4, pri_x),
             &opts,
             &mut stats,
         );
@@ -803,14 +772,8 @@ mod tests {
             for f in 0..pri_mesh.faces.len() {
                 let pri = pri_mesh.face(f);
                 let w = integrate_pair(
-                    &FaceGeom {
-                        kind: FaceType::Quad9,
-                        x: &sec,
-                    },
-                    &FaceGeom {
-                        kind: FaceType::Tri6,
-                        x: &pri,
-                    },
+                    &geom(FaceType::Quad9, &sec),
+                    &geom(FaceType::Tri6, &pri),
                     &opts,
                     &mut stats,
                 );
@@ -856,26 +819,14 @@ mod tests {
             );
             let mut stats = RejectStats::default();
             let w0 = integrate_pair(
-                &FaceGeom {
-                    kind: FaceType::Quad9,
-                    x: &sec,
-                },
-                &FaceGeom {
-                    kind: FaceType::Tri6,
-                    x: &pri,
-                },
+                &geom(FaceType::Quad9, &sec),
+                &geom(FaceType::Tri6, &pri),
                 &opts,
                 &mut stats,
             );
             let w1 = integrate_pair(
-                &FaceGeom {
-                    kind: FaceType::Quad9,
-                    x: &sec_m,
-                },
-                &FaceGeom {
-                    kind: FaceType::Tri6,
-                    x: &pri_m,
-                },
+                &geom(FaceType::Quad9, &sec_m),
+                &geom(FaceType::Tri6, &pri_m),
                 &opts,
                 &mut stats,
             );

@@ -7,10 +7,10 @@
 use num_dual::DualNum;
 
 use super::parent::{face_jacobian_by_nodes, parent_seed, OfParent};
-use super::plane_map::{traced_polygon, PlaneMap};
+use super::plane_map::{PlaneMap, TracedOverlap};
 use super::plane_value::PlaneValue;
 use super::tangent::{PointGeometry, PointValues, SubPairTangent};
-use super::{Kernel, ParentDual, PlaneDual, MAX_NODES, MAX_SEC_DOFS, PRIMARY_SLOT};
+use super::{Kernel, ParentDual, PlaneDual, MAX_NODES, MAX_SEC_DOFS};
 use crate::contact::mortar::overlap::{pallets_of, Overlap, PairFailure};
 use crate::contact::mortar::projection::{det2, solve2, triangle_local, Bilinear, LocalPoint};
 use crate::contact::mortar::segments::{traction_shape_on_at, SubSegment, TractionScheme};
@@ -22,13 +22,10 @@ pub(super) fn integrate_overlap(
     overlap: &Overlap,
     tangent: &mut SubPairTangent,
 ) -> Result<(), PairFailure> {
-    let s_map = PlaneMap::new(&overlap.s, 0);
-    let m_map = PlaneMap::new(&overlap.m, PRIMARY_SLOT);
-    let (polygon, unresolved) = traced_polygon(overlap, &s_map, &m_map);
-    tangent.unresolved += unresolved;
-    let (s_dual, m_dual) = (DualMap::new(&s_map), DualMap::new(&m_map));
+    let traced = TracedOverlap::new(overlap, &mut tangent.unresolved);
+    let (s_dual, m_dual) = (DualMap::new(&traced.s), DualMap::new(&traced.m));
     let sec_jacobian = overlap.s.seg.parent_jacobian();
-    for pallet in pallets_of(kernel.pallets, &polygon, &overlap.origins) {
+    for pallet in pallets_of(kernel.pallets, &traced.polygon, &overlap.origins) {
         for (point, (q, w)) in kernel
             .rule
             .points

@@ -3,10 +3,10 @@
 //! their derivatives along the plane coordinates, and the values tabulated at each point.
 
 use super::parent::{face_jacobian, parent_seed, shape_derivatives, shape_values_at, OfParent};
-use super::plane_map::{traced_polygon, PlaneMap};
+use super::plane_map::TracedOverlap;
 use super::plane_value::{to_parent, PlanePallet};
 use super::tangent::{PointGeometry, PointValues, SubPairTangent};
-use super::{Kernel, ParentDual, MAX_NODES, MAX_SEC_DOFS, PRIMARY_SLOT};
+use super::{Kernel, ParentDual, MAX_NODES, MAX_SEC_DOFS};
 use crate::contact::mortar::overlap::{pallets_of, Overlap, PairFailure};
 use crate::contact::mortar::segments::{traction_shape_on_at, TractionScheme};
 use crate::fe::shape::TensorShape;
@@ -20,12 +20,10 @@ impl Kernel<'_> {
         overlap: &Overlap,
         tangent: &mut SubPairTangent,
     ) -> Result<(), PairFailure> {
-        let s_map = PlaneMap::new(&overlap.s, 0);
-        let m_map = PlaneMap::new(&overlap.m, PRIMARY_SLOT);
-        let (polygon, unresolved) = traced_polygon(overlap, &s_map, &m_map);
-        tangent.unresolved += unresolved;
+        let traced = TracedOverlap::new(overlap, &mut tangent.unresolved);
+        let (s_map, m_map) = (&traced.s, &traced.m);
         let sec_jacobian = overlap.s.seg.parent_jacobian();
-        for pallet in pallets_of(self.pallets, &polygon, &overlap.origins) {
+        for pallet in pallets_of(self.pallets, &traced.polygon, &overlap.origins) {
             let pallet = PlanePallet::of(&pallet);
             for (point, (q, w)) in self.rule.points.iter().zip(&self.rule.weights).enumerate() {
                 let p = pallet.point(*q);

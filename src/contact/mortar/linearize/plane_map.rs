@@ -6,7 +6,7 @@
 use num_dual::DualSVec64;
 
 use super::plane_value::{plane_det2, PlaneValue};
-use super::{slots, PlaneDual, PLANE_SLOTS};
+use super::{slots, PlaneDual, PLANE_SLOTS, PRIMARY_SLOT};
 use crate::contact::mortar::clip::VertexOrigin;
 use crate::contact::mortar::overlap::Overlap;
 use crate::contact::mortar::projection::{det2, solve2, Bilinear, LocalPoint, Projected};
@@ -210,9 +210,28 @@ fn crossing(
     [a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t]
 }
 
+/// The level-2 geometry of an overlap: its projected sub-segments and its polygon.
+pub(super) struct TracedOverlap<'o> {
+    pub(super) s: PlaneMap<'o>,
+    pub(super) m: PlaneMap<'o>,
+    /// The overlap polygon in level-2 duals (see [`traced_polygon`]).
+    pub(super) polygon: Vec<[PlaneDual; 2]>,
+}
+
+impl<'o> TracedOverlap<'o> {
+    /// The level-2 geometry of `overlap`, adding its vertices held fixed to `unresolved`.
+    pub(super) fn new(overlap: &'o Overlap, unresolved: &mut usize) -> Self {
+        let s = PlaneMap::new(&overlap.s, 0);
+        let m = PlaneMap::new(&overlap.m, PRIMARY_SLOT);
+        let (polygon, held) = traced_polygon(overlap, &s, &m);
+        *unresolved += held;
+        TracedOverlap { s, m, polygon }
+    }
+}
+
 /// The overlap polygon in level-2 duals: each float vertex with the derivatives of its
 /// provenance, or held fixed (counted) if the provenance is ambiguous or misses it.
-pub(super) fn traced_polygon(
+fn traced_polygon(
     overlap: &Overlap,
     s_map: &PlaneMap,
     m_map: &PlaneMap,

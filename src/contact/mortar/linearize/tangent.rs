@@ -47,11 +47,7 @@ impl PointValues {
         };
         dweight_dx.iter_mut().for_each(|g| *g *= ratio);
         self.weight = weight;
-        if self.is_finite() {
-            Ok(())
-        } else {
-            Err(PairFailure::NonFinite)
-        }
+        self.is_finite().then_some(()).ok_or(PairFailure::NonFinite)
     }
 
     fn is_finite(&self) -> bool {
@@ -228,11 +224,7 @@ impl SubPairTangent {
 
     /// The end of a sub-segment pair's level 2: fails if a derivative is not finite.
     pub(super) fn finished(&self) -> Result<(), PairFailure> {
-        if self.is_finite() {
-            Ok(())
-        } else {
-            Err(PairFailure::NonFinite)
-        }
+        self.is_finite().then_some(()).ok_or(PairFailure::NonFinite)
     }
 
     fn is_finite(&self) -> bool {

@@ -2,7 +2,9 @@
 
 use super::*;
 use crate::contact::mortar::pair::integrate_pair;
-use crate::contact::mortar::test_support::{settings, with_splits, Setting, SCHEMES};
+use crate::contact::mortar::test_support::{
+    geom, max_abs, max_difference, settings, with_splits, Setting, SCHEMES,
+};
 use crate::test_rng::Rng;
 use crate::vec3::{cross, Vec3};
 
@@ -84,18 +86,7 @@ fn linearized(
     stats: &mut RejectStats,
 ) -> LinearizedWeights {
     let opts = options(how, sec.0, pri.0);
-    integrate_pair_linearized(
-        &FaceGeom {
-            kind: sec.0,
-            x: sec.1,
-        },
-        &FaceGeom {
-            kind: pri.0,
-            x: pri.1,
-        },
-        &opts,
-        stats,
-    )
+    integrate_pair_linearized(&geom(sec.0, sec.1), &geom(pri.0, pri.1), &opts, stats)
 }
 
 /// `integrate_pair`'s weights, dense (`n1` then `n2`), with its counts.
@@ -107,18 +98,7 @@ fn reference(
     let scheme = how.0;
     let opts = options(how, sec.0, pri.0);
     let mut stats = RejectStats::default();
-    let w = integrate_pair(
-        &FaceGeom {
-            kind: sec.0,
-            x: sec.1,
-        },
-        &FaceGeom {
-            kind: pri.0,
-            x: pri.1,
-        },
-        &opts,
-        &mut stats,
-    );
+    let w = integrate_pair(&geom(sec.0, sec.1), &geom(pri.0, pri.1), &opts, &mut stats);
     let (ns, np) = (sec.0.num_nodes(), pri.0.num_nodes());
     let nt = traction_node_count(sec.0, scheme);
     let mut dense = vec![0.0; nt * (ns + np)];
@@ -145,17 +125,6 @@ fn derivative_column(w: &LinearizedWeights, j: usize) -> Vec<f64> {
         .collect()
 }
 
-fn max_abs(v: &[f64]) -> f64 {
-    v.iter().fold(0.0, |m, x| m.max(x.abs()))
-}
-
-fn max_difference(a: &[f64], b: &[f64]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (x - y).abs())
-        .fold(0.0, f64::max)
-}
-
 /// Every combination of face types (secondary, primary).
 fn all_type_pairs() -> impl Iterator<Item = (FaceType, FaceType)> {
     FaceType::ALL
@@ -171,16 +140,7 @@ fn assert_reproduces_reference(
     opts: &IntegrationOptions,
     what: &str,
 ) {
-    let (sg, pg) = (
-        FaceGeom {
-            kind: sec.0,
-            x: sec.1,
-        },
-        FaceGeom {
-            kind: pri.0,
-            x: pri.1,
-        },
-    );
+    let (sg, pg) = (geom(sec.0, sec.1), geom(pri.0, pri.1));
     let (mut s_float, mut s_dual) = (RejectStats::default(), RejectStats::default());
     let float = integrate_pair_linearized(&sg, &pg, opts, &mut s_float);
     let dual = linearized_with(
@@ -219,12 +179,11 @@ fn assert_reproduces_reference(
 
 /// Three pairs of the bending scene (`cases/bending`: Hex27 layers, Quad9 faces, scheme 2,
 /// degree 8), secondary then primary nodes, face order: the undeformed pair at `x = 0`
-/// (exactly touching, coincident edges at `y = 0, 1`: with the float level 2 rounding one
-/// division differently, its weights differed in the last bit, which flipped the signs of
-/// round-off gaps and the first step no longer converged); a pair of the first Newton
-/// iterate; a pair late in the bending whose overlap has a vertex where nearly parallel
-/// edges cross (`x = 7.51124` and `7.51122`): plane derivatives of 1e12 cancel, and a
-/// different order of the same operations changed the derivatives by 5e-5 relative.
+/// (exactly touching, coincident edges at `y = 0, 1`: weighted gaps of round-off size, whose
+/// signs the last bit of the weights decides); a pair of the first Newton iterate; a pair late
+/// in the bending whose overlap has a vertex where nearly parallel edges cross (`x = 7.51124`
+/// and `7.51122`): plane derivatives of 1e12 cancel, so the derivatives depend on the order of
+/// the operations (module docs of [`super`], "Exactness").
 const BENDING_PAIRS: [[f64; 54]; 3] = [
     [
         0.0,
