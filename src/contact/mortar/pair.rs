@@ -86,77 +86,59 @@ pub struct PairWeights {
     pub area: f64,
 }
 
-/// Dense accumulators of one face pair.
-struct Accumulator {
-    n1: Vec<f64>,
-    n2: Vec<f64>,
-    area: f64,
-    /// Quadrature points added.
-    points: usize,
-    sec_nodes: usize,
-    pri_nodes: usize,
+/// Integrates one secondary face against one primary face (see the module docs), adding the
+/// rejections and integrated sub-segment pairs to `stats`.
+///
+/// # Panics
+/// If a face's `x.len()` differs from its type's number of nodes.
+pub fn integrate_pair(
+    sec: &FaceGeom,
+    pri: &FaceGeom,
+    opts: &IntegrationOptions,
+    stats: &mut RejectStats,
+) -> PairWeights {
+    assert_node_counts(sec, pri, "integrate_pair");
+    let (ns, np) = (sec.kind.num_nodes(), pri.kind.num_nodes());
+    let traction_count = traction_node_count(sec.kind, opts.scheme);
+    let mut kernel = ValueKernel {
+        context: PairContext {
+            sec,
+            pri,
+            scheme: opts.scheme,
+            rule: FaceType::Tri3.quadrature(opts.degree),
+            pallets: opts.pallets,
+        },
+        scratch: Scratch::default(),
+        pair: Accumulator::new(traction_count, ns, np),
+        total: Accumulator::new(traction_count, ns, np),
+    };
+    walk_sub_pairs(sec, pri, stats, &mut kernel);
+    kernel.total.into_weights()
 }
 
-impl Accumulator {
-    fn new(traction_nodes: usize, sec_nodes: usize, pri_nodes: usize) -> Self {
-        Accumulator {
-            n1: vec![0.0; traction_nodes * sec_nodes],
-            n2: vec![0.0; traction_nodes * pri_nodes],
-            area: 0.0,
-            points: 0,
-            sec_nodes,
-            pri_nodes,
-        }
-    }
+/// The value kernel on the sub-segment pairs of one face pair (the walk's [`SubPairKernel`]).
+struct ValueKernel<'a> {
+    context: PairContext<'a>,
+    scratch: Scratch,
+    /// The sub-segment pair being integrated, merged into `total` on success.
+    pair: Accumulator,
+    total: Accumulator,
+}
 
-    /// Adds one quadrature point's contributions.
-    fn add_point(&mut self, weight: f64, phi: &[f64], n1: &[f64], n2: &[f64]) {
-        self.area += weight;
-        self.points += 1;
-        for (k, &pk) in phi.iter().enumerate() {
-            let wp = weight * pk;
-            let row1 = &mut self.n1[k * self.sec_nodes..(k + 1) * self.sec_nodes];
-            for (v, nb) in row1.iter_mut().zip(n1) {
-                *v += wp * nb;
+impl SubPairKernel for ValueKernel<'_> {
+    fn integrate(&mut self, overlap: &Overlap) -> SubPairOutcome {
+        self.pair.clear();
+        let integrated = self
+            .context
+            .integrate_overlap(overlap, &mut self.pair, &mut self.scratch);
+        match integrated {
+            Ok(()) => {
+                self.total.merge(&self.pair);
+                SubPairOutcome::Integrated {
+                    points: self.pair.points,
+                }
             }
-            let row2 = &mut self.n2[k * self.pri_nodes..(k + 1) * self.pri_nodes];
-            for (v, nc) in row2.iter_mut().zip(n2) {
-                *v += wp * nc;
-            }
-        }
-    }
-
-    fn merge(&mut self, other: &Accumulator) {
-        self.area += other.area;
-        self.points += other.points;
-        for (a, b) in self.n1.iter_mut().zip(&other.n1) {
-            *a += b;
-        }
-        for (a, b) in self.n2.iter_mut().zip(&other.n2) {
-            *a += b;
-        }
-    }
-
-    fn clear(&mut self) {
-        self.area = 0.0;
-        self.points = 0;
-        self.n1.iter_mut().for_each(|v| *v = 0.0);
-        self.n2.iter_mut().for_each(|v| *v = 0.0);
-    }
-
-    fn into_weights(self) -> PairWeights {
-        let triples = |dense: &[f64], cols: usize| {
-            dense
-                .iter()
-                .enumerate()
-                .filter(|(_, v)| **v != 0.0)
-                .map(|(i, v)| (i / cols, i % cols, *v))
-                .collect()
-        };
-        PairWeights {
-            n1: triples(&self.n1, self.sec_nodes),
-            n2: triples(&self.n2, self.pri_nodes),
-            area: self.area,
+            Err(failure) => SubPairOutcome::Failed(failure),
         }
     }
 }
@@ -231,61 +213,79 @@ impl PairContext<'_> {
     }
 }
 
-/// The value kernel on the sub-segment pairs of one face pair (the walk's [`SubPairKernel`]).
-struct ValueKernel<'a> {
-    context: PairContext<'a>,
-    scratch: Scratch,
-    /// The sub-segment pair being integrated, merged into `total` on success.
-    pair: Accumulator,
-    total: Accumulator,
+/// Dense accumulators of one face pair.
+struct Accumulator {
+    n1: Vec<f64>,
+    n2: Vec<f64>,
+    area: f64,
+    /// Quadrature points added.
+    points: usize,
+    sec_nodes: usize,
+    pri_nodes: usize,
 }
 
-impl SubPairKernel for ValueKernel<'_> {
-    fn integrate(&mut self, overlap: &Overlap) -> SubPairOutcome {
-        self.pair.clear();
-        let integrated = self
-            .context
-            .integrate_overlap(overlap, &mut self.pair, &mut self.scratch);
-        match integrated {
-            Ok(()) => {
-                self.total.merge(&self.pair);
-                SubPairOutcome::Integrated {
-                    points: self.pair.points,
-                }
-            }
-            Err(failure) => SubPairOutcome::Failed(failure),
+impl Accumulator {
+    fn new(traction_nodes: usize, sec_nodes: usize, pri_nodes: usize) -> Self {
+        Accumulator {
+            n1: vec![0.0; traction_nodes * sec_nodes],
+            n2: vec![0.0; traction_nodes * pri_nodes],
+            area: 0.0,
+            points: 0,
+            sec_nodes,
+            pri_nodes,
         }
     }
-}
 
-/// Integrates one secondary face against one primary face (see the module docs), adding the
-/// rejections and integrated sub-segment pairs to `stats`.
-///
-/// # Panics
-/// If a face's `x.len()` differs from its type's number of nodes.
-pub fn integrate_pair(
-    sec: &FaceGeom,
-    pri: &FaceGeom,
-    opts: &IntegrationOptions,
-    stats: &mut RejectStats,
-) -> PairWeights {
-    assert_node_counts(sec, pri, "integrate_pair");
-    let (ns, np) = (sec.kind.num_nodes(), pri.kind.num_nodes());
-    let traction_count = traction_node_count(sec.kind, opts.scheme);
-    let mut kernel = ValueKernel {
-        context: PairContext {
-            sec,
-            pri,
-            scheme: opts.scheme,
-            rule: FaceType::Tri3.quadrature(opts.degree),
-            pallets: opts.pallets,
-        },
-        scratch: Scratch::default(),
-        pair: Accumulator::new(traction_count, ns, np),
-        total: Accumulator::new(traction_count, ns, np),
-    };
-    walk_sub_pairs(sec, pri, stats, &mut kernel);
-    kernel.total.into_weights()
+    /// Adds one quadrature point's contributions.
+    fn add_point(&mut self, weight: f64, phi: &[f64], n1: &[f64], n2: &[f64]) {
+        self.area += weight;
+        self.points += 1;
+        for (k, &pk) in phi.iter().enumerate() {
+            let wp = weight * pk;
+            let row1 = &mut self.n1[k * self.sec_nodes..(k + 1) * self.sec_nodes];
+            for (v, nb) in row1.iter_mut().zip(n1) {
+                *v += wp * nb;
+            }
+            let row2 = &mut self.n2[k * self.pri_nodes..(k + 1) * self.pri_nodes];
+            for (v, nc) in row2.iter_mut().zip(n2) {
+                *v += wp * nc;
+            }
+        }
+    }
+
+    fn merge(&mut self, other: &Accumulator) {
+        self.area += other.area;
+        self.points += other.points;
+        for (a, b) in self.n1.iter_mut().zip(&other.n1) {
+            *a += b;
+        }
+        for (a, b) in self.n2.iter_mut().zip(&other.n2) {
+            *a += b;
+        }
+    }
+
+    fn clear(&mut self) {
+        self.area = 0.0;
+        self.points = 0;
+        self.n1.iter_mut().for_each(|v| *v = 0.0);
+        self.n2.iter_mut().for_each(|v| *v = 0.0);
+    }
+
+    fn into_weights(self) -> PairWeights {
+        let triples = |dense: &[f64], cols: usize| {
+            dense
+                .iter()
+                .enumerate()
+                .filter(|(_, v)| **v != 0.0)
+                .map(|(i, v)| (i / cols, i % cols, *v))
+                .collect()
+        };
+        PairWeights {
+            n1: triples(&self.n1, self.sec_nodes),
+            n2: triples(&self.n2, self.pri_nodes),
+            area: self.area,
+        }
+    }
 }
 
 #[cfg(test)]
