@@ -41,14 +41,12 @@
 //!
 //! The band [`CONE_TIE`] (1e-10 relative) settles a tie: a node that slipped in the last step
 //! starts the next one carrying a traction on the cone, so its first trial (the predictor's,
-//! `dsh = 0`) lies on the cone to round-off, and round-off alone (which differs between rank
-//! counts and machines) used to pick its first tangent, stick or slip. Measured on a partly
-//! covered frictional slide (`tests/contact.rs`, `contact_one_and_two_ranks_agree`): one rank
-//! count cut a step and the other did not, and the runs ended 3e-5 apart; with the band both
-//! take slip, the same path (1e-14 apart) and 78 Newton iterations (95 on two ranks before, 136
-//! with the cut on one). Inside the band the traction is the trial, as in stick, so the
-//! traction is that of the plain return map, continuous: the band chooses only the tangent (that
-//! of a slide that goes on), as the touching band does (`touching_friction`).
+//! `dsh = 0`) lies on the cone to round-off, and round-off alone (which differs between rank counts
+//! and machines) would pick its first tangent, stick or slip; with the band it takes slip, whatever
+//! the rank count (`tests/contact.rs`, `contact_one_and_two_ranks_agree`; the figures are in
+//! docs/performance.md). Inside the band the traction is the trial, as in stick, so the traction is
+//! that of the plain return map, continuous: the band chooses only the tangent (that of a slide
+//! that goes on), as the touching band does (`touching_friction`).
 //!
 //! Derivatives returned in [`FrictionResult`] (matrices row-major: `d[i][j] = d t_T_i / d x_j`):
 //!
@@ -234,10 +232,10 @@ pub fn normal_pressure_touching(lambda_n: f64, eps_n: f64, gh: f64, touch: f64) 
 /// node takes [`touching_friction`].
 ///
 /// Surfaces that start in contact touch to round-off: their weighted gaps are `+-1e-16`, and
-/// a round-off penetration gives a round-off pressure. With the Coulomb law on that pressure,
-/// the first tangent took a stick or a slip state per node, and a slip direction, from the last
-/// bits of the gaps: a change of summation order or of quadrature rule decided whether the
-/// first step of the two-layer cantilever (`cases/bending`) converged.
+/// a round-off penetration gives a round-off pressure. The Coulomb law on that pressure would
+/// take a stick or a slip state per node, and a slip direction, from the last bits of the gaps
+/// (so from the summation order or the quadrature rule); inside the band no friction is taken
+/// from them.
 pub fn carries_friction(p: f64, eps_n: f64, touch: f64) -> bool {
     p > eps_n * touch
 }
@@ -460,6 +458,19 @@ pub fn friction_traction(
     }
 }
 
+/// The pressure `p = max(0, lambda_n + eps_n gh)` and the return-mapped traction with it at
+/// this state (what the Uzawa update and the end of a step store).
+fn traction_at(
+    h: &NodeHistory,
+    prm: &LawParams,
+    nu: [f64; 3],
+    gh: f64,
+    dsh: [f64; 3],
+) -> (f64, FrictionResult) {
+    let (p, _) = normal_pressure(h.lambda_n, prm.eps_n, gh);
+    (p, friction_traction(h, prm, nu, p, dsh))
+}
+
 /// Uzawa updates after a converged solve: `lambda_n <- max(0, lambda_n + eps_n gh)`;
 /// `lambda_t <- R(nu, nu_old) t_T - traction_t_old`, with `t_T` the return-mapped traction at
 /// this state (computed with the updated pressure), brought back into the old tangent plane, so
@@ -476,8 +487,7 @@ pub fn uzawa_update(
     gh: f64,
     dsh: [f64; 3],
 ) -> NodeHistory {
-    let (p, _) = normal_pressure(h.lambda_n, prm.eps_n, gh);
-    let fr = friction_traction(h, prm, nu, p, dsh);
+    let (p, fr) = traction_at(h, prm, nu, gh, dsh);
     let old = Vector3::from(h.traction_t_old);
     let back = if h.normal_old == [0.0; 3] {
         Some(Vector3::from(fr.traction))
@@ -510,8 +520,7 @@ pub fn commit_step(
     gh: f64,
     dsh: [f64; 3],
 ) -> NodeHistory {
-    let (p, _) = normal_pressure(h.lambda_n, prm.eps_n, gh);
-    let fr = friction_traction(h, prm, nu, p, dsh);
+    let (_, fr) = traction_at(h, prm, nu, gh, dsh);
     let (n, _) = unit(nu);
     NodeHistory {
         lambda_n: h.lambda_n,
@@ -868,7 +877,7 @@ mod tests {
 
         /// Keeps length, maps nu_old to nu and the old tangent plane into the new one, and
         /// back-transport is the inverse: all to `tol = 4e-15 / sqrt(1 + c)` relative (at most
-        /// 1.3e-13 here, with 1 + c > 1e-3; measured worst over 2e6 samples: 1.8e-15 / sqrt(1 + c)).
+        /// 1.3e-13 here, with 1 + c > 1e-3).
         #[test]
         fn transport_is_a_rotation_between_planes(
             a in prop::array::uniform3(-1.0f64..1.0),

@@ -56,9 +56,7 @@
 //! (node -> faces) in compressed rows, the derivative blocks of all nodes in one vector with
 //! offsets, and the shape-function gradients at the face nodes tabulated once per process; nothing
 //! is allocated per node. [`NodalNormals::update`] recomputes into the arrays of an existing object,
-//! so repeated iterations allocate nothing at all. Measured (release build, one core, surfaces of
-//! 1e5 nodes): `update` about 0.4 us per node (Quad4, Tri6) to 0.45 us (Quad9); a fresh `compute`
-//! about twice that (allocation and first touch of the ~0.9-1.6 million derivative blocks).
+//! so repeated iterations allocate nothing at all (its cost per node: docs/performance.md).
 
 use std::sync::OnceLock;
 
@@ -210,191 +208,31 @@ impl NodalNormals {
         x: &[[f64; 3]],
         symmetry: &[(usize, usize)],
     ) -> Result<(), String> {
-        let table = grad_table();
-        let nx = x.len();
-        for (f, face) in faces.iter().enumerate() {
-            let nn = face.kind.num_nodes();
-            if face.nodes.len() != nn {
-                return Err(format!(
-                    "surface face {f} ({}) has {} nodes, expected {nn}",
-                    face.kind.name(),
-                    face.nodes.len()
-                ));
-            }
-            if let Some(&b) = face.nodes.iter().find(|&&b| b >= nx) {
-                return Err(format!(
-                    "surface face {f} refers to node {b}, but only {nx} node coordinates are given"
-                ));
-            }
-        }
+        check_faces(faces, x.len())?;
         let NodalNormals {
             nodes,
             local,
             nu,
             offsets,
             deriv,
-            scratch:
-                Scratch {
-                    inc_off,
-                    inc,
-                    mask,
-                    pos,
-                },
+            scratch,
         } = self;
-
-        // Surface nodes, ascending, and the global -> local map.
-        local.clear();
-        local.resize(nx, NONE);
-        for face in faces {
-            for &b in face.nodes {
-                local[b] = 0;
-            }
-        }
-        nodes.clear();
-        for (b, l) in local.iter_mut().enumerate() {
-            if *l != NONE {
-                *l = nodes.len();
-                nodes.push(b);
-            }
-        }
+        number_surface_nodes(faces, x.len(), local, nodes);
         let n = nodes.len();
-
-        // Incidence in compressed rows, filled with `inc_off[k]` as the cursor of row `k`, which
-        // leaves `inc_off[k]` at the end of row `k`, i.e. the start of row `k + 1`.
-        inc_off.clear();
-        inc_off.resize(n + 1, 0);
-        for face in faces {
-            for &b in face.nodes {
-                inc_off[local[b] + 1] += 1;
-            }
-        }
-        for k in 0..n {
-            inc_off[k + 1] += inc_off[k];
-        }
-        inc.clear();
-        inc.resize(inc_off[n], (0, 0));
-        for (f, face) in faces.iter().enumerate() {
-            for (i, &b) in face.nodes.iter().enumerate() {
-                let l = local[b];
-                inc[inc_off[l]] = (f, i);
-                inc_off[l] += 1;
-            }
-        }
-        for k in (1..=n).rev() {
-            inc_off[k] = inc_off[k - 1];
-        }
-        if n > 0 {
-            inc_off[0] = 0;
-        }
-
-        // Symmetry: bit `axis` of mask[k] zeroes that component of the normal of nodes[k].
-        mask.clear();
-        mask.resize(n, 0);
-        for &(b, axis) in symmetry {
-            if axis > 2 {
-                return Err(format!(
-                    "symmetry condition on node {b}: axis {axis} is not 0, 1 or 2"
-                ));
-            }
-            if let Some(&l) = local.get(b) {
-                if l != NONE {
-                    mask[l] |= 1 << axis;
-                }
-            }
-        }
-
+        scratch.build_incidence(faces, local, n);
+        scratch.build_mask(symmetry, local, n)?;
         deriv.clear();
         nu.clear();
         offsets.clear();
         offsets.push(0);
-        pos.clear();
-        pos.resize(nx, NONE);
-
+        scratch.pos.clear();
+        scratch.pos.resize(x.len(), NONE);
         for (la, &a_glob) in nodes.iter().enumerate() {
             let start = deriv.len();
-            let incident = &inc[inc_off[la]..inc_off[la + 1]];
-            let mut s = [0.0; 3];
-            for &(f, ia) in incident {
-                let face = &faces[f];
-                let nn = face.kind.num_nodes();
-                let g = &table[type_index(face.kind)][ia][..nn];
-                let mut t1 = [0.0; 3];
-                let mut t2 = [0.0; 3];
-                for (&b, gb) in face.nodes.iter().zip(g) {
-                    for d in 0..3 {
-                        t1[d] += gb[0] * x[b][d];
-                        t2[d] += gb[1] * x[b][d];
-                    }
-                }
-                let c = cross(t1, t2);
-                let len = norm(c);
-                if !(len > 0.0 && len.is_finite()) {
-                    return Err(format!(
-                        "nodal normal of node {a_glob}: surface face {f} ({}) is degenerate or \
-                         not finite there (|x_,xi x x_,eta| = {len:e})",
-                        face.kind.name()
-                    ));
-                }
-                let nf = c.map(|v| v / len);
-                for d in 0..3 {
-                    s[d] += nf[d];
-                }
-                // d n_f / d x_b = Q ([t1]_x dN_b/deta - [t2]_x dN_b/dxi), Q = (I - n n^T)/|n~|.
-                let q = tangent_projector(nf, len);
-                let q1 = matmul(&q, &skew(t1));
-                let q2 = matmul(&q, &skew(t2));
-                for (&b, gb) in face.nodes.iter().zip(g) {
-                    let p = if pos[b] == NONE {
-                        pos[b] = deriv.len();
-                        deriv.push((b, [[0.0; 3]; 3]));
-                        pos[b]
-                    } else {
-                        pos[b]
-                    };
-                    let m = &mut deriv[p].1;
-                    for i in 0..3 {
-                        for j in 0..3 {
-                            m[i][j] += gb[1] * q1[i][j] - gb[0] * q2[i][j];
-                        }
-                    }
-                }
-            }
-            for e in &deriv[start..] {
-                pos[e.0] = NONE;
-            }
-
-            for (d, sd) in s.iter_mut().enumerate() {
-                if mask[la] & (1 << d) != 0 {
-                    *sd = 0.0;
-                }
-            }
-            let ls = norm(s);
-            if !ls.is_finite() || ls <= VANISHING * incident.len() as f64 {
-                return Err(format!(
-                    "nodal normal of node {a_glob} vanishes: the unit normals of the {} faces \
-                     around it{} sum to |s| = {ls:e} (faces folded back onto each other?)",
-                    incident.len(),
-                    if mask[la] != 0 {
-                        ", with the symmetry components zeroed,"
-                    } else {
-                        ""
-                    }
-                ));
-            }
-            let nu_a = s.map(|v| v / ls);
-            // d nu = R P ds with R = (I - nu nu^T)/|s'|: zero the constrained columns of R.
-            let mut rp = tangent_projector(nu_a, ls);
-            for row in rp.iter_mut() {
-                for (d, v) in row.iter_mut().enumerate() {
-                    if mask[la] & (1 << d) != 0 {
-                        *v = 0.0;
-                    }
-                }
-            }
-            for e in &mut deriv[start..] {
-                e.1 = matmul(&rp, &e.1);
-            }
-            deriv[start..].sort_unstable_by_key(|e| e.0);
+            let incident = &scratch.inc[scratch.inc_off[la]..scratch.inc_off[la + 1]];
+            let s = sum_face_normals(faces, x, incident, a_glob, deriv, &mut scratch.pos)?;
+            let mask = scratch.mask[la];
+            let nu_a = normalize(s, mask, incident.len(), a_glob, &mut deriv[start..])?;
             nu.push(nu_a);
             offsets.push(deriv.len());
         }
@@ -430,6 +268,235 @@ impl NodalNormals {
     pub fn num_nodes(&self) -> usize {
         self.nodes.len()
     }
+}
+
+/// Checks that every face has its type's number of nodes, all of them below `nx`.
+fn check_faces(faces: &[SurfaceFace], nx: usize) -> Result<(), String> {
+    for (f, face) in faces.iter().enumerate() {
+        let nn = face.kind.num_nodes();
+        if face.nodes.len() != nn {
+            return Err(format!(
+                "surface face {f} ({}) has {} nodes, expected {nn}",
+                face.kind.name(),
+                face.nodes.len()
+            ));
+        }
+        if let Some(&b) = face.nodes.iter().find(|&&b| b >= nx) {
+            return Err(format!(
+                "surface face {f} refers to node {b}, but only {nx} node coordinates are given"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The surface nodes, ascending, into `nodes`, and the global -> local map of the `nx` nodes
+/// into `local` ([`NONE`] off the surface).
+fn number_surface_nodes(
+    faces: &[SurfaceFace],
+    nx: usize,
+    local: &mut Vec<usize>,
+    nodes: &mut Vec<usize>,
+) {
+    local.clear();
+    local.resize(nx, NONE);
+    for face in faces {
+        for &b in face.nodes {
+            local[b] = 0;
+        }
+    }
+    nodes.clear();
+    for (b, l) in local.iter_mut().enumerate() {
+        if *l != NONE {
+            *l = nodes.len();
+            nodes.push(b);
+        }
+    }
+}
+
+impl Scratch {
+    /// The incidence (node -> faces) of the `n` surface nodes numbered by `local`, in
+    /// compressed rows.
+    fn build_incidence(&mut self, faces: &[SurfaceFace], local: &[usize], n: usize) {
+        let Scratch { inc_off, inc, .. } = self;
+        // Filled with `inc_off[k]` as the cursor of row `k`, which leaves `inc_off[k]` at the end
+        // of row `k`, i.e. the start of row `k + 1`.
+        inc_off.clear();
+        inc_off.resize(n + 1, 0);
+        for face in faces {
+            for &b in face.nodes {
+                inc_off[local[b] + 1] += 1;
+            }
+        }
+        for k in 0..n {
+            inc_off[k + 1] += inc_off[k];
+        }
+        inc.clear();
+        inc.resize(inc_off[n], (0, 0));
+        for (f, face) in faces.iter().enumerate() {
+            for (i, &b) in face.nodes.iter().enumerate() {
+                let l = local[b];
+                inc[inc_off[l]] = (f, i);
+                inc_off[l] += 1;
+            }
+        }
+        for k in (1..=n).rev() {
+            inc_off[k] = inc_off[k - 1];
+        }
+        if n > 0 {
+            inc_off[0] = 0;
+        }
+    }
+
+    /// The symmetry mask of the `n` surface nodes numbered by `local`: bit `axis` of `mask[k]`
+    /// zeroes that component of the normal of node `k`. Entries off the surface are ignored.
+    fn build_mask(
+        &mut self,
+        symmetry: &[(usize, usize)],
+        local: &[usize],
+        n: usize,
+    ) -> Result<(), String> {
+        let mask = &mut self.mask;
+        mask.clear();
+        mask.resize(n, 0);
+        for &(b, axis) in symmetry {
+            if axis > 2 {
+                return Err(format!(
+                    "symmetry condition on node {b}: axis {axis} is not 0, 1 or 2"
+                ));
+            }
+            if let Some(&l) = local.get(b) {
+                if l != NONE {
+                    mask[l] |= 1 << axis;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The sum `s = sum_f n_f` of the unit normals of the faces around node `a_glob` at the node
+/// (`incident`: each face and the node's position in it), with `sum_f d n_f / d x_b` of every
+/// node `b` of those faces appended to `deriv` (one block per node; `pos` maps a node to its
+/// block while the node is processed, and is [`NONE`] again on success).
+fn sum_face_normals(
+    faces: &[SurfaceFace],
+    x: &[[f64; 3]],
+    incident: &[(usize, usize)],
+    a_glob: usize,
+    deriv: &mut Vec<(usize, Mat3)>,
+    pos: &mut [usize],
+) -> Result<[f64; 3], String> {
+    let table = grad_table();
+    let start = deriv.len();
+    let mut s = [0.0; 3];
+    for &(f, ia) in incident {
+        let face = &faces[f];
+        let nn = face.kind.num_nodes();
+        let g = &table[type_index(face.kind)][ia][..nn];
+        let mut t1 = [0.0; 3];
+        let mut t2 = [0.0; 3];
+        for (&b, gb) in face.nodes.iter().zip(g) {
+            for d in 0..3 {
+                t1[d] += gb[0] * x[b][d];
+                t2[d] += gb[1] * x[b][d];
+            }
+        }
+        let c = cross(t1, t2);
+        let len = norm(c);
+        if !(len > 0.0 && len.is_finite()) {
+            return Err(format!(
+                "nodal normal of node {a_glob}: surface face {f} ({}) is degenerate or \
+                 not finite there (|x_,xi x x_,eta| = {len:e})",
+                face.kind.name()
+            ));
+        }
+        let nf = c.map(|v| v / len);
+        for d in 0..3 {
+            s[d] += nf[d];
+        }
+        add_face_normal_derivative(face.nodes, g, [t1, t2], nf, len, deriv, pos);
+    }
+    for e in &deriv[start..] {
+        pos[e.0] = NONE;
+    }
+    Ok(s)
+}
+
+/// Adds `d n_f / d x_b = Q ([t1]_x dN_b/deta - [t2]_x dN_b/dxi)`, `Q = (I - n n^T) / |n~|`, of
+/// the face with nodes `nodes` and gradients `g` at the node (tangents `t`, unit normal `nf`,
+/// `len = |n~|`) to the blocks of its nodes in `deriv` (see [`sum_face_normals`]).
+fn add_face_normal_derivative(
+    nodes: &[usize],
+    g: &[[f64; 2]],
+    t: [[f64; 3]; 2],
+    nf: [f64; 3],
+    len: f64,
+    deriv: &mut Vec<(usize, Mat3)>,
+    pos: &mut [usize],
+) {
+    let q = tangent_projector(nf, len);
+    let q1 = matmul(&q, &skew(t[0]));
+    let q2 = matmul(&q, &skew(t[1]));
+    for (&b, gb) in nodes.iter().zip(g) {
+        let p = if pos[b] == NONE {
+            pos[b] = deriv.len();
+            deriv.push((b, [[0.0; 3]; 3]));
+            pos[b]
+        } else {
+            pos[b]
+        };
+        let m = &mut deriv[p].1;
+        for i in 0..3 {
+            for j in 0..3 {
+                m[i][j] += gb[1] * q1[i][j] - gb[0] * q2[i][j];
+            }
+        }
+    }
+}
+
+/// `nu_A = s' / |s'|` of node `a_glob` from the sum `s` of the unit normals of its `count`
+/// faces, `s' = P s` with the symmetry `mask`; `blocks` hold `(b, sum_f d n_f / d x_b)` on entry
+/// and `(b, d nu_A / d x_b)`, sorted by `b`, on return.
+fn normalize(
+    mut s: [f64; 3],
+    mask: u8,
+    count: usize,
+    a_glob: usize,
+    blocks: &mut [(usize, Mat3)],
+) -> Result<[f64; 3], String> {
+    for (d, sd) in s.iter_mut().enumerate() {
+        if mask & (1 << d) != 0 {
+            *sd = 0.0;
+        }
+    }
+    let ls = norm(s);
+    if !ls.is_finite() || ls <= VANISHING * count as f64 {
+        return Err(format!(
+            "nodal normal of node {a_glob} vanishes: the unit normals of the {count} faces \
+             around it{} sum to |s| = {ls:e} (faces folded back onto each other?)",
+            if mask != 0 {
+                ", with the symmetry components zeroed,"
+            } else {
+                ""
+            }
+        ));
+    }
+    let nu_a = s.map(|v| v / ls);
+    // d nu = R P ds with R = (I - nu nu^T)/|s'|: zero the constrained columns of R.
+    let mut rp = tangent_projector(nu_a, ls);
+    for row in rp.iter_mut() {
+        for (d, v) in row.iter_mut().enumerate() {
+            if mask & (1 << d) != 0 {
+                *v = 0.0;
+            }
+        }
+    }
+    for e in blocks.iter_mut() {
+        e.1 = matmul(&rp, &e.1);
+    }
+    blocks.sort_unstable_by_key(|e| e.0);
+    Ok(nu_a)
 }
 
 #[cfg(test)]
@@ -547,6 +614,19 @@ mod tests {
         std::array::from_fn(|i| std::array::from_fn(|j| a[j][i]))
     }
 
+    /// A surface face of type `kind` with nodes `nodes`.
+    fn face(kind: FaceType, nodes: &[usize]) -> SurfaceFace<'_> {
+        SurfaceFace { kind, nodes }
+    }
+
+    /// The largest magnitude of an entry of derivative blocks.
+    fn largest_entry(blocks: &[(usize, Mat3)]) -> f64 {
+        blocks
+            .iter()
+            .flat_map(|(_, m)| m.iter().flatten())
+            .fold(0.0f64, |acc, v| acc.max(v.abs()))
+    }
+
     /// A tilted plane through `o` with orthonormal in-plane axes `e1, e2` and normal
     /// `e1 x e2 = nrm`.
     fn tilted_plane() -> ([f64; 3], [f64; 3], [f64; 3], [f64; 3]) {
@@ -608,14 +688,8 @@ mod tests {
             [10.0 * c, 1.0, -10.0 * s],
         ];
         let faces = [
-            SurfaceFace {
-                kind: FaceType::Quad4,
-                nodes: &[0, 1, 2, 3],
-            },
-            SurfaceFace {
-                kind: FaceType::Quad4,
-                nodes: &[1, 4, 5, 2],
-            },
+            face(FaceType::Quad4, &[0, 1, 2, 3]),
+            face(FaceType::Quad4, &[1, 4, 5, 2]),
         ];
         let nn = NodalNormals::compute(&faces, &x, &[]).unwrap();
         for a in [1, 2] {
@@ -656,8 +730,7 @@ mod tests {
 
     /// On a sphere, quadratic faces give nodal normals at the corners within O(h^2) of the radial
     /// direction. Tolerance: with `h = 1.2 / nc` the element width in radians, the largest corner
-    /// angle error must stay below `0.25 h^2` (measured: about `0.1 h^2` for quadrilaterals,
-    /// `0.16..0.21 h^2` for Tri6) and drop by more than 2.5 at each halving of `h` (measured 3 to 4).
+    /// angle error must stay below `0.25 h^2` and drop by more than 2.5 at each halving of `h`.
     #[test]
     fn sphere_patch_normals_converge_to_the_radius() {
         for kind in [FaceType::Quad8, FaceType::Quad9, FaceType::Tri6] {
@@ -725,16 +798,11 @@ mod tests {
             let nodes: Vec<usize> = nn.nodes().collect();
             let global_max = nodes
                 .iter()
-                .flat_map(|&a| nn.derivative(a))
-                .flat_map(|(_, m)| m.iter().flatten())
-                .fold(0.0f64, |acc, v| acc.max(v.abs()));
+                .map(|&a| largest_entry(nn.derivative(a)))
+                .fold(0.0f64, f64::max);
             assert!(global_max > 0.1, "{kind:?}: derivative suspiciously small");
             let scale = |a: usize| {
-                let s = nn
-                    .derivative(a)
-                    .iter()
-                    .flat_map(|(_, m)| m.iter().flatten())
-                    .fold(0.0f64, |acc, v| acc.max(v.abs()));
+                let s = largest_entry(nn.derivative(a));
                 if s > 0.0 {
                     s
                 } else {
@@ -818,10 +886,7 @@ mod tests {
                 }
                 let (d0, d1) = (n0.derivative(a), n1.derivative(a));
                 assert_eq!(d0.len(), d1.len());
-                let big = d0
-                    .iter()
-                    .flat_map(|(_, m)| m.iter().flatten())
-                    .fold(0.0f64, |acc, v| acc.max(v.abs()));
+                let big = largest_entry(d0);
                 for ((b0, m0), (b1, m1)) in d0.iter().zip(d1) {
                     assert_eq!(b0, b1);
                     let rot = matmul(&matmul(&r, m0), &transpose(&r));
@@ -855,14 +920,8 @@ mod tests {
             p(0.0, 1.0),
         ];
         let faces = [
-            SurfaceFace {
-                kind: FaceType::Quad4,
-                nodes: &[0, 1, 2, 3],
-            },
-            SurfaceFace {
-                kind: FaceType::Quad4,
-                nodes: &[1, 4, 5, 2],
-            },
+            face(FaceType::Quad4, &[0, 1, 2, 3]),
+            face(FaceType::Quad4, &[1, 4, 5, 2]),
         ];
         let err = NodalNormals::compute(&faces, &x, &[]).unwrap_err();
         assert!(err.contains("node 1 "), "{err}");
@@ -870,14 +929,8 @@ mod tests {
 
         // Triangles folded the same way.
         let tri = [
-            SurfaceFace {
-                kind: FaceType::Tri3,
-                nodes: &[0, 1, 2],
-            },
-            SurfaceFace {
-                kind: FaceType::Tri3,
-                nodes: &[2, 1, 4],
-            },
+            face(FaceType::Tri3, &[0, 1, 2]),
+            face(FaceType::Tri3, &[2, 1, 4]),
         ];
         let err = NodalNormals::compute(&tri, &x, &[]).unwrap_err();
         assert!(err.contains("node 1 "), "{err}");
@@ -899,10 +952,7 @@ mod tests {
         // Malformed input.
         assert!(NodalNormals::compute(&faces, &x[..4], &[]).is_err());
         assert!(NodalNormals::compute(&faces, &x, &[(1, 3)]).is_err());
-        let short = [SurfaceFace {
-            kind: FaceType::Quad4,
-            nodes: &[0, 1, 2],
-        }];
+        let short = [face(FaceType::Quad4, &[0, 1, 2])];
         assert!(NodalNormals::compute(&short, &x, &[]).is_err());
     }
 
@@ -924,14 +974,8 @@ mod tests {
         }
         let x = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
         let folded = [
-            SurfaceFace {
-                kind: FaceType::Tri3,
-                nodes: &[0, 1, 2],
-            },
-            SurfaceFace {
-                kind: FaceType::Tri3,
-                nodes: &[0, 2, 1],
-            },
+            face(FaceType::Tri3, &[0, 1, 2]),
+            face(FaceType::Tri3, &[0, 2, 1]),
         ];
         assert!(nn.update(&folded, &x, &[]).is_err());
         assert_eq!(nn.num_nodes(), 0);

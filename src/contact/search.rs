@@ -282,10 +282,10 @@ fn planar(b: &Aabb, axes: [usize; 2]) -> AABB<[f64; 2]> {
 /// the boxes' lower corners. Along an axis where all boxes lie within about one box size (a flat
 /// surface normal to a coordinate axis, the usual test interface), those slabs do not separate
 /// anything: the split follows ties or round-off, sibling nodes cover the same region, and a query
-/// has to descend into all of them. Measured on a flat 1000 x 1000 grid, a 3D tree visits about
-/// 2.5 times (6 times with the boxes in random order) as many nodes per query as a tree built on
-/// the two in-plane axes, and the ratio grows with the size. Such an axis carries no useful
-/// information for the tree, so it is dropped and tested exactly at the leaves instead.
+/// has to descend into all of them: a 3D tree visits several times as many nodes per query as a
+/// tree built on the two in-plane axes, more as the surface grows (figures in
+/// docs/performance.md). Such an axis carries no useful information for the tree, so it is
+/// dropped and tested exactly at the leaves instead.
 fn thin_axis(primary: &[Aabb]) -> Option<usize> {
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];

@@ -8,16 +8,25 @@
 //! for traction nodes A of the secondary face, displacement nodes B of the secondary face and C
 //! of the primary face, over the overlap gamma of the two faces.
 //!
+//! The modules, in the order a face pair goes through them:
+//!
 //! - [`segments`]: the linear sub-segments of quadratic faces (the paper's Figure 1; Tri6 is
 //!   split into four triangles) and the traction functions `Phi` of the three schemes
 //!   ([`TractionScheme`]); scheme 1 is refused on Quad8 and Tri6 by [`traction_nodes`].
-//! - [`clip`]: robust intersection of convex polygons in the projection plane, and the pallets
-//!   (triangles from the overlap's centroid, or a fan from one of its vertices) the overlap is
-//!   integrated on.
-//! - [`pair`]: [`integrate_pair`], one secondary face against one primary face: projection
-//!   plane per secondary sub-segment (the face's geometric normal at the sub-segment centre),
-//!   clipping, pallet quadrature, and the weights with the same points for `n1` and `n2` (so
-//!   `sum_B n1_AB = sum_C n2_AC`: linear momentum). Rejections are counted in [`RejectStats`].
+//! - [`projection`]: the projection plane of a secondary sub-segment (the face's geometric
+//!   normal at the sub-segment centre) and the maps between the plane and the sub-segments'
+//!   local coordinates (triangle in closed form, bilinear quadrilateral by Newton), generic over
+//!   the scalar so that both kernels run the same code.
+//! - [`clip`]: robust intersection of convex polygons in the projection plane, with the
+//!   provenance of each overlap vertex, and the pallets (triangles from the overlap's centroid,
+//!   or a fan from one of its vertices) the overlap is integrated on.
+//! - [`overlap`]: the walk both kernels share: every sub-segment pair, its rejection tests,
+//!   its overlap polygon and pallets, and the counts of what became of it ([`RejectStats`]).
+//! - [`pair`]: the value kernel, [`integrate_pair`]: at each quadrature point `N1`, `Phi`, `N2`
+//!   and the measure, and the weights with the same points for `n1` and `n2` (so
+//!   `sum_B n1_AB = sum_C n2_AC`: linear momentum).
+//! - [`linearize`]: the linearized kernel, [`integrate_pair_linearized`]: the same weights with
+//!   their exact derivatives with respect to the node coordinates of both faces.
 //!
 //! Conventions a caller relies on: traction node `k` of a face is its face-local node `k`
 //! (traction nodes are all nodes, or the corners, which come first); the measure is the true
@@ -26,7 +35,9 @@
 
 pub mod clip;
 pub mod linearize;
+pub mod overlap;
 pub mod pair;
+pub mod projection;
 pub mod segments;
 #[cfg(test)]
 mod test_support;

@@ -3,11 +3,11 @@
 //! # Sub-segments (the paper's Figure 1)
 //!
 //! Quadratic faces are integrated piece by piece: each face is split, in its parent coordinates,
-//! into linear sub-segments (triangles or quadrilaterals) whose vertices are face nodes. The
-//! mortar integrator projects and clips these straight-edged pieces, and maps every quadrature
-//! point back into the face's parent coordinates, where the full (possibly quadratic) shape
-//! functions of the face are evaluated. With `c0..c3` the corners, `m0..m3` the mid-edge nodes on
-//! the edges `(c0 c1), (c1 c2), ...` and `ctr` the Quad9 centre (VTK order, [`crate::fe::element`]):
+//! into linear sub-segments (triangles or quadrilaterals) whose vertices are face nodes. The mortar
+//! integrator projects and clips these straight-edged pieces, and maps every quadrature point back
+//! into the face's parent coordinates, where the full (possibly quadratic) shape functions of the
+//! face are evaluated. With `c0..c3` the corners, `m0..m3` the mid-edge nodes on the edges
+//! `(c0 c1), (c1 c2), ...` and `ctr` the Quad9 centre (VTK order, [`crate::fe::element`]):
 //!
 //! | face  | sub-segments |
 //! |-------|--------------|
@@ -143,7 +143,8 @@ impl SubSegment {
 
     /// The affine map `xi = origin + J local` of the sub-segment into the parent domain (exact:
     /// triangles, and quadrilaterals that are parallelograms in the parent domain, which all
-    /// sub-segments of [`sub_segments`] are). Returns `(origin, J)` with `J[i][j] = dxi_i/dlocal_j`.
+    /// sub-segments of [`sub_segments`] are). Returns `(origin, J)` with
+    /// `J[i][j] = dxi_i/dlocal_j`.
     pub fn affine_map(&self) -> ([f64; 2], [[f64; 2]; 2]) {
         let v = &self.vertices;
         if v.len() == 3 {

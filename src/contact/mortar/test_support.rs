@@ -1,6 +1,8 @@
-//! What the tests of the mortar kernels share: the traction schemes and pallet splits to run.
+//! What the tests of the mortar kernels share: the traction schemes and pallet splits to run,
+//! faces as the kernels take them, and comparisons of results.
 
 use super::clip::PalletSplit;
+use super::overlap::FaceGeom;
 use super::segments::{traction_nodes, TractionScheme};
 use crate::fe::FaceType;
 
@@ -36,4 +38,22 @@ pub fn with_splits(schemes: impl IntoIterator<Item = TractionScheme>) -> Vec<Set
 /// Every scheme a secondary face type admits, with each pallet split.
 pub fn settings(kind: FaceType) -> Vec<Setting> {
     with_splits(allowed_schemes(kind))
+}
+
+/// A face of type `kind` with node coordinates `x`, as the kernels take it.
+pub fn geom(kind: FaceType, x: &[[f64; 3]]) -> FaceGeom<'_> {
+    FaceGeom { kind, x }
+}
+
+/// The largest difference between entries of `a` and `b`.
+pub fn max_difference(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
+}
+
+/// The largest magnitude of an entry.
+pub fn max_abs(v: &[f64]) -> f64 {
+    v.iter().fold(0.0, |m, x| m.max(x.abs()))
 }

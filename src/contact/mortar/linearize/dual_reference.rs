@@ -1,20 +1,20 @@
-//! The level 2 of [`super`] in `PlaneDual` numbers (16-slot forward mode, the formulation of the
-//! kernel before its level 2 was written out in floats): the reference the float level 2 must
-//! reproduce **bit for bit** (test `float_level2_reproduces_the_dual_reference`).
-//!
-//! The nonlinear solves are sensitive to the last bit of the weights: on the bending scene
-//! (`cases/bending`) the layers touch exactly in the undeformed state, the weighted gaps are
-//! round-off (`+-1e-16`), and their signs decide which nodes get a pressure and so a friction
-//! state at the first tangent; a weight that differed in its last bit (a float `a / b` for the
-//! duals' `a * (1 / b)`) changed that decision and the first load step no longer converged.
-//! Where a derivative is ill-conditioned (overlap vertices that are crossings of nearly parallel
-//! edges, with plane derivatives of `1e12` that cancel in the sum) a different order of the
-//! same operations changes it by `1e-5` relative. So the float code does the duals' operations
-//! in the duals' order, and this module keeps the duals to check it.
+//! Level 2 of [`super`] in `PlaneDual` numbers (16-slot forward mode): the dual formulation that
+//! the float level 2 must reproduce **bit for bit** (test
+//! `float_level2_reproduces_the_dual_reference`; why, in the module docs of [`super`],
+//! "Exactness"). It runs the same walk, pallets and float inverse maps, and evaluates the point
+//! geometry with the generic code of `projection` and the shape functions in dual numbers.
 
 use num_dual::DualNum;
 
-use super::*;
+use super::parent::{face_jacobian_by_nodes, parent_seed, OfParent};
+use super::plane_map::{PlaneMap, TracedOverlap};
+use super::plane_value::PlaneValue;
+use super::tangent::{PointGeometry, PointValues, SubPairTangent};
+use super::{Kernel, ParentDual, PlaneDual, MAX_NODES, MAX_SEC_DOFS};
+use crate::contact::mortar::overlap::{pallets_of, Overlap, PairFailure};
+use crate::contact::mortar::projection::{det2, solve2, triangle_local, Bilinear, LocalPoint};
+use crate::contact::mortar::segments::{traction_shape_on_at, SubSegment, TractionScheme};
+use crate::vec3::cross;
 
 /// [`Kernel::integrate_overlap`] in level-2 duals.
 pub(super) fn integrate_overlap(
@@ -22,21 +22,10 @@ pub(super) fn integrate_overlap(
     overlap: &Overlap,
     tangent: &mut SubPairTangent,
 ) -> Result<(), PairFailure> {
-    let s_map = PlaneMap::new(&overlap.s, 0);
-    let m_map = PlaneMap::new(&overlap.m, PRIMARY_SLOT);
-    let (polygon, unresolved) = traced_polygon(overlap, &s_map, &m_map);
-    tangent.unresolved += unresolved;
-    let (s_dual, m_dual) = (DualMap::new(&s_map), DualMap::new(&m_map));
+    let traced = TracedOverlap::new(overlap, &mut tangent.unresolved);
+    let (s_dual, m_dual) = (DualMap::new(&traced.s), DualMap::new(&traced.m));
     let sec_jacobian = overlap.s.seg.parent_jacobian();
-    let apex = kernel.pallets.apex(&polygon, &overlap.origins);
-    for (i, j) in kernel.pallets.edges(polygon.len(), &overlap.origins) {
-        let (a, b) = (polygon[i], polygon[j]);
-        let u = [a[0] - apex[0], a[1] - apex[1]];
-        let v = [b[0] - apex[0], b[1] - apex[1]];
-        let twice_area = det2(u, v);
-        if twice_area.re <= 0.0 {
-            continue;
-        }
+    for pallet in pallets_of(kernel.pallets, &traced.polygon, &overlap.origins) {
         for (point, (q, w)) in kernel
             .rule
             .points
@@ -44,27 +33,18 @@ pub(super) fn integrate_overlap(
             .zip(&kernel.rule.weights)
             .enumerate()
         {
-            let p = [
-                apex[0] + u[0] * q[0] + v[0] * q[1],
-                apex[1] + u[1] * q[0] + v[1] * q[1],
-            ];
-            let p_float = [p[0].re, p[1].re];
-            let on_s = overlap.s.invert(p_float).ok_or(PairFailure::InverseMap)?;
-            let on_m = overlap.m.invert(p_float).ok_or(PairFailure::InverseMap)?;
+            let p = pallet.point(*q);
+            let (on_s, on_m) = overlap.locate([p[0].re, p[1].re])?;
             let local_s = s_dual.local(p, &on_s);
             let local_m = m_dual.local(p, &on_m);
             let xi_s = overlap.s.seg.to_parent_at(local_s);
             let xi_m = overlap.m.seg.to_parent_at(local_m);
-            let measure = twice_area * (w * sec_jacobian) / s_dual.jacobian(local_s);
+            let measure = pallet.twice_area * (w * sec_jacobian) / s_dual.jacobian(local_s);
             add_point(kernel, overlap.s.seg, xi_s, xi_m, measure, point, tangent)?;
         }
         tangent.add_pallet();
     }
-    if tangent.is_finite() {
-        Ok(())
-    } else {
-        Err(PairFailure::NonFinite)
-    }
+    tangent.finished()
 }
 
 /// [`Kernel::add_point`] in level-2 duals.
@@ -104,16 +84,7 @@ fn add_point(
         .shape_at(parent_seed(xi_m.map(|v| v.re)), &mut n[..np]);
     OfParent::fill(&mut values.n2, &n[..np]);
     let weight = measure * lift(&face_jacobian, &xi_s);
-    let ratio = if face_jacobian.re > 0.0 {
-        weight.re / face_jacobian.re
-    } else {
-        0.0
-    };
-    dweight_dx.iter_mut().for_each(|g| *g *= ratio);
-    values.weight = weight.re;
-    if !values.is_finite() {
-        return Err(PairFailure::NonFinite);
-    }
+    values.set_weight(weight.re, face_jacobian.re, &mut dweight_dx)?;
     let at = PointGeometry {
         seg,
         xi_s: xi_s.map(|x| PlaneValue::of(&x)),
@@ -133,7 +104,7 @@ fn lift(f: &ParentDual, xi: &[PlaneDual; 2]) -> PlaneDual {
     }
 }
 
-/// [`face_jacobian`] from the shape-function gradients in `ParentDual` numbers.
+/// `super::parent::face_jacobian` from the shape-function gradients in `ParentDual` numbers.
 fn face_jacobian(
     x: &[[f64; 3]],
     dn: &[[ParentDual; 2]],
@@ -149,17 +120,13 @@ fn face_jacobian(
     }
     let c = cross(t[0], t[1]);
     let jacobian = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
-    dj_dx.fill(0.0);
-    if jacobian.re > 0.0 {
-        let n = c.map(|v| v.re / jacobian.re);
-        let [t1, t2] = t.map(|ti| ti.map(|v| v.re));
-        let (h1, h2) = (cross(t2, n), cross(n, t1));
-        for (a, g) in dn.iter().enumerate() {
-            for d in 0..3 {
-                dj_dx[3 * a + d] = h1[d] * g[0].re + h2[d] * g[1].re;
-            }
-        }
-    }
+    face_jacobian_by_nodes(
+        t.map(|ti| ti.map(|v| v.re)),
+        c.map(|v| v.re),
+        jacobian.re,
+        dn.iter().map(|g| [g[0].re, g[1].re]),
+        dj_dx,
+    );
     jacobian
 }
 
@@ -179,11 +146,11 @@ impl DualMap {
     /// Closed form on a triangle, one Newton step from `found` on a quadrilateral.
     fn local(&self, p: [PlaneDual; 2], found: &LocalPoint) -> [PlaneDual; 2] {
         match &self.bilinear {
-            None => super::super::pair::triangle_local(&self.vertices[..3], p).0,
+            None => triangle_local(&self.vertices[..3], p).0,
             Some(map) => {
                 let x = map.point(found.local);
                 let j = map.jacobian_re(found.local);
-                let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+                let det = det2(j[0], j[1]);
                 let [d0, d1] = solve2(j, det, [x[0] - p[0], x[1] - p[1]]);
                 [-d0 + found.local[0], -d1 + found.local[1]]
             }
