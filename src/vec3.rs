@@ -4,7 +4,14 @@
 //! and their dual-number twins use one definition. Every operation is written out component by
 //! component, left to right: the float and the dual code round the same way.
 
-use crate::fe::shape::Scalar;
+use num_dual::DualNum;
+
+/// The scalars of the generic face kernels (`*_at` functions): `f64`, or a forward-mode dual
+/// number over `f64` such as `num_dual::DualSVec64<N>`, so that one code gives the values and
+/// (with duals) their exact derivatives. The `f64` instances compile to the plain float code.
+pub trait Scalar: DualNum<Primitive = f64> + Copy {}
+
+impl<T: DualNum<Primitive = f64> + Copy> Scalar for T {}
 
 /// A three-vector.
 pub type Vec3<T = f64> = [T; 3];

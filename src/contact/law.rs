@@ -43,7 +43,7 @@
 //! starts the next one carrying a traction on the cone, so its first trial (the predictor's,
 //! `dsh = 0`) lies on the cone to round-off, and round-off alone (which differs between rank counts
 //! and machines) would pick its first tangent, stick or slip; with the band it takes slip, whatever
-//! the rank count (`tests/contact.rs`, `contact_one_and_two_ranks_agree`; the figures are in
+//! the rank count (`tests/one_and_two_ranks_agree.rs`, `contact_one_and_two_ranks_agree`; the figures are in
 //! docs/performance.md). Inside the band the traction is the trial, as in stick, so the traction is
 //! that of the plain return map, continuous: the band chooses only the tangent (that of a slide
 //! that goes on), as the touching band does (`touching_friction`).
@@ -263,6 +263,37 @@ pub fn touching_friction(nu: [f64; 3], prm: &LawParams) -> FrictionResult {
     FrictionResult {
         d_dsh: to_rows(&d_dsh),
         ..FrictionResult::zero(Status::Open)
+    }
+}
+
+/// The tangential law of a node with pressure `p` (and `dp_dgh`, from
+/// [`normal_pressure_touching`] with the band `touch`), normal `nu` and slip `dsh`: inside the
+/// touching band the band's stick tangent ([`touching_friction`]), else where pressed the Coulomb
+/// return map ([`friction_traction`]; with `stick_all`, the stick predictor's `mu = infinity`),
+/// else no friction; frictionless (`mu = 0`) a pure pressure.
+pub fn tangential_law(
+    history: &NodeHistory,
+    prm: &LawParams,
+    nu: [f64; 3],
+    (p, dp_dgh): (f64, f64),
+    dsh: [f64; 3],
+    (touch, stick_all): (f64, bool),
+) -> FrictionResult {
+    let touching = dp_dgh > 0.0 && !carries_friction(p, prm.eps_n, touch);
+    if prm.mu > 0.0 && touching {
+        touching_friction(nu, prm)
+    } else if prm.mu > 0.0 && p > 0.0 {
+        let law = if stick_all {
+            LawParams {
+                mu: f64::INFINITY,
+                ..*prm
+            }
+        } else {
+            *prm
+        };
+        friction_traction(history, &law, nu, p, dsh)
+    } else {
+        FrictionResult::frictionless(p)
     }
 }
 

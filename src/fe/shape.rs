@@ -47,16 +47,9 @@
 //! ([`FaceType::shape`], [`face_normal`], ...) are these instantiated at `f64`, plain float
 //! code. The mortar linearization ([`crate::contact::mortar::linearize`]) is their user in dual numbers.
 
-use num_dual::DualNum;
-
 use super::element::{ElementType, FaceType, HEX_NODES, QUAD_NODES};
 
-/// The scalars of the generic face kernels (`*_at` functions): `f64`, or a forward-mode dual
-/// number over `f64` such as `num_dual::DualSVec64<N>`, so that one code gives the values and
-/// (with duals) their exact derivatives. The `f64` instances compile to the plain float code.
-pub trait Scalar: DualNum<Primitive = f64> + Copy {}
-
-impl<T: DualNum<Primitive = f64> + Copy> Scalar for T {}
+pub use crate::vec3::Scalar;
 
 /// Edges of the triangle, in the order of the Tri6 mid-edge nodes 3..5.
 const TRI_EDGES: [[usize; 2]; 3] = [[0, 1], [1, 2], [2, 0]];

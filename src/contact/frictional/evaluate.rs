@@ -6,10 +6,7 @@ use std::collections::BTreeMap;
 use std::rc::Rc;
 
 use crate::case::ContactMethod;
-use crate::contact::law::{
-    carries_friction, friction_traction, normal_pressure_touching, touching_friction,
-    FrictionResult, LawParams,
-};
+use crate::contact::law::{normal_pressure_touching, tangential_law, LawParams};
 use crate::contact::mortar::{
     integrate_pair, integrate_pair_linearized, traction_node_count, FaceGeom, IntegrationOptions,
     LinearizedWeights, PalletSplit, RejectStats, TractionScheme,
@@ -520,22 +517,8 @@ impl ContactPass {
             }
             _ => [0.0; 3],
         };
-        let touching = dp_dgh > 0.0 && !carries_friction(p, prm.eps_n, TOUCH_TOLERANCE * st.h);
-        let fr = if ctx.iface_mu > 0.0 && touching {
-            touching_friction(nu, &prm)
-        } else if ctx.iface_mu > 0.0 && p > 0.0 {
-            let law = if ctx.stick_all {
-                LawParams {
-                    mu: f64::INFINITY,
-                    ..prm
-                }
-            } else {
-                prm
-            };
-            friction_traction(&st.history, &law, nu, p, dsh)
-        } else {
-            FrictionResult::frictionless(p)
-        };
+        let band = (TOUCH_TOLERANCE * st.h, ctx.stick_all);
+        let fr = tangential_law(&st.history, &prm, nu, (p, dp_dgh), dsh, band);
         let t: [f64; 3] = std::array::from_fn(|c| p * nu[c] + fr.traction[c]);
         fields = NodeFields {
             area,

@@ -41,8 +41,7 @@ pub use pass::{NTS_MARGIN, NTS_PATTERN_MARGIN};
 use num_dual::DualSVec64;
 
 use crate::contact::law::{
-    carries_friction, friction_traction, normal_pressure_touching, touching_friction,
-    FrictionResult, LawParams, NodeHistory,
+    normal_pressure_touching, tangential_law, FrictionResult, LawParams, NodeHistory,
 };
 use crate::fe::shape::{face_normal_at, face_point_at, face_tangents_at};
 use crate::fe::FaceType;
@@ -254,22 +253,8 @@ pub fn node_contribution(
     let nu_re = nu.map(|v| v.re);
     let (p, dp_dgh) =
         normal_pressure_touching(law.history.lambda_n, law.params.eps_n, gh.re, law.touch);
-    let touching = dp_dgh > 0.0 && !carries_friction(p, law.params.eps_n, law.touch);
-    let friction = if law.params.mu > 0.0 && touching {
-        touching_friction(nu_re, &law.params)
-    } else if law.params.mu > 0.0 && p > 0.0 {
-        let prm = if law.stick_all {
-            LawParams {
-                mu: f64::INFINITY,
-                ..law.params
-            }
-        } else {
-            law.params
-        };
-        friction_traction(law.history, &prm, nu_re, p, slip)
-    } else {
-        FrictionResult::frictionless(p)
-    };
+    let band = (law.touch, law.stick_all);
+    let friction = tangential_law(law.history, &law.params, nu_re, (p, dp_dgh), slip, band);
     let t: [f64; 3] = std::array::from_fn(|c| p * nu_re[c] + friction.traction[c]);
     let n_re: Vec<f64> = shape.iter().map(|v| v.re).collect();
     let mut force = vec![0.0; l];
