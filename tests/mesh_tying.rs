@@ -149,3 +149,27 @@ fn tied_sphere_one_and_two_ranks_agree() {
         assert!(text.contains(field), "{field} missing");
     }
 }
+
+/// A tied interface that stops at its Uzawa cap says so on every rank count: on 2 ranks the run
+/// completes with one warning naming the tied gap, and the summary counts the capped steps (the
+/// gap is reduced over the ranks inside the Uzawa step, on every rank: a reduction on rank 0
+/// alone would hang the job, which `mpirun --timeout` would end).
+#[test]
+fn a_tied_interface_at_its_uzawa_cap_warns_on_two_ranks() {
+    let text = tied_blocks("hex8", 1, 2)
+        .replace("penalty = 1e5", "penalty = 1e2")
+        .replace("uzawa_max = 200", "uzawa_max = 1");
+    let case = common::write_case("tied_uzawa_cap", &text);
+    let out_dir = case.parent().unwrap().join("out_2");
+    let out = common::run_raw(&case, 2, &out_dir, &["-q"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "the run failed:\n{stderr}");
+    let warnings: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.contains("still above its Uzawa tolerances"))
+        .collect();
+    assert_eq!(warnings.len(), 1, "one warning per capped step:\n{stderr}");
+    assert!(warnings[0].contains("tied relative gap"), "{}", warnings[0]);
+    assert!(!warnings[0].contains("contact:"), "{}", warnings[0]);
+    assert_eq!(common::metric(&out_dir, "uzawa_capped_steps"), 1.0);
+}

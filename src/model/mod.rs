@@ -12,7 +12,7 @@
 //! | tangent | [`Contribution::jacobian`] | every Newton iteration (and the predictor's) |
 //! | augmentation (Uzawa) | [`Contribution::augment`] | after a converged Newton solve |
 //! | a cut step | [`Contribution::save`], [`Contribution::restore`] | at a step's start, at a cut |
-//! | a converged step | [`Contribution::commit`] | once the step's outputs are written |
+//! | a converged step | [`Contribution::commit`] | after the step's VTU files, before its history row |
 //! | output | [`Contribution::output`], [`Contribution::history`] | per step written |
 //! | summary | [`Contribution::metrics`] | at the end of a run |
 //!
@@ -229,8 +229,9 @@ pub trait Contribution {
         false
     }
 
-    /// Hands `couple` every set of nodes whose dofs this contribution couples in the rows
-    /// this rank owns (each set a dense block of the matrix pattern), at the state `at`.
+    /// Hands `couple` every set of nodes whose dofs this contribution couples (each set a dense
+    /// block of the matrix pattern), at the state `at`: at least every set that has a node whose
+    /// rows this rank owns, on every rank (a rank's pattern is of the rows it owns).
     fn couplings(&self, at: &State, couple: &mut dyn FnMut(&[usize]));
 
     /// Adds this rank's terms of `F(u; t)` to `out`. Returns the issue that makes the state

@@ -13,7 +13,7 @@
 //! also the same in every Newton iteration of a step, so the LU's symbolic factorization can be
 //! reused.
 //!
-//! **Owned entries.** The bulk and contact tangents add their blocks to the rows this rank owns
+//! **Owned entries.** The tangent blocks of every contribution go to the rows this rank owns
 //! straight into the stored values (`super::owned_rows`), not through `MatSetValues`.
 //!
 //! **Off-process entries.** On more than one rank, the entries a rank adds to rows another rank

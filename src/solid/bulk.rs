@@ -88,11 +88,6 @@ impl Bulk {
         })
     }
 
-    /// The local elements and their geometry.
-    pub fn elements(&self) -> &[(usize, ElementGeometry)] {
-        &self.elements
-    }
-
     fn face_rule(&self, ft: FaceType) -> &Rule2 {
         &self
             .face_rules

@@ -131,9 +131,8 @@ impl Pattern {
         }
     }
 
-    /// Adds the couplings `parts` hand out at `at` (each contribution whose pattern moves
-    /// with the displacements when `moving`, else each whose pattern does not); returns true
-    /// if a row gained a column.
+    /// Adds the couplings `parts` hand out at `at`, in the rows of the nodes this rank owns;
+    /// returns true if a row gained a column.
     pub fn add<'a>(
         &mut self,
         dofs: &DofMap,

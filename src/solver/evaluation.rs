@@ -59,6 +59,9 @@ impl Evaluator {
     }
 }
 
+/// Whether a state can be evaluated: on every rank the same domain error where it cannot.
+pub(super) type Verdict = Result<(), CallbackError>;
+
 /// The model evaluated in a run's context.
 #[derive(Clone, Copy)]
 pub(super) struct Evaluation<'a> {
@@ -69,13 +72,13 @@ pub(super) struct Evaluation<'a> {
 impl Evaluation<'_> {
     /// `F(x; t)` into `f` at the evaluator's load factor, timed; the domain issue of any rank
     /// as one error on all (*collective*).
-    pub fn residual(&self, x: &Vector, f: &mut Vector) -> Result<Result<(), CallbackError>> {
+    pub fn residual(&self, x: &Vector, f: &mut Vector) -> Result<Verdict> {
         let issue = self.timed(x, |at| assembly::residual(self.model, at, &self.cx.dofs, f))?;
         Ok(domain_check(&self.cx.world, issue))
     }
 
     /// `dF/du (x; t)` into `jac`, as [`Evaluation::residual`].
-    pub fn jacobian(&self, x: &Vector, jac: &mut Matrix) -> Result<Result<(), CallbackError>> {
+    pub fn jacobian(&self, x: &Vector, jac: &mut Matrix) -> Result<Verdict> {
         let issue = self.timed(x, |at| {
             assembly::jacobian(self.model, at, &self.cx.dofs, jac)
         })?;

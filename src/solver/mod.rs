@@ -144,11 +144,13 @@ struct Linear {
     /// The near null space of every matrix made.
     rigid_modes: Vec<Vec<f64>>,
     jac: Matrix,
-    /// The Newton iterate; the last converged state, the start of a stick predictor, the start
-    /// of a first attempt.
+    /// The Newton iterate.
     x: Vector,
+    /// The last converged state (restored when a step is cut).
     x_prev: Vector,
+    /// The start of the stick predictor (the step restarts there when it does not converge).
     x_guess: Vector,
+    /// The start of a first attempt (the fallback line search restarts there).
     x_attempt: Vector,
     snes: Snes,
     tangent: Tangent,

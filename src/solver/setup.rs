@@ -96,11 +96,11 @@ fn model_of(scene: &Scene, dofs: &mut DofMap, world: &SimpleCommunicator) -> Res
     if !contact.is_empty() {
         interfaces.push(Box::new(contact));
     }
-    let gathered: Vec<usize> = interfaces.iter().flat_map(|c| c.coupled_nodes()).collect();
-    dofs.gather_also(&gathered);
     let mut parts: Vec<Box<dyn Contribution>> = vec![Box::new(Bulk::new(scene, dofs)?)];
     parts.extend(interfaces);
-    Ok(Model::new(parts))
+    let model = Model::new(parts);
+    dofs.gather_also(&model.coupled_nodes());
+    Ok(model)
 }
 
 impl Linear {

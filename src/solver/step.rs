@@ -19,7 +19,7 @@ use super::predictor::{predict, NewtonTangent};
 use super::results::StepRow;
 use super::setup::new_matrix;
 use super::summary::{not_started, retries_note, Load};
-use super::{Run, FULL_STEP_ITERATIONS, STICK_PREDICTOR_ITERATIONS, TIMED_PARTS};
+use super::{Run, FULL_STEP_ITERATIONS, STICK_PREDICTOR_ITERATIONS};
 
 /// What became of a step.
 pub(super) enum StepEnd {
@@ -33,21 +33,27 @@ pub(super) enum StepEnd {
     Stopped,
 }
 
-/// The solves of one step.
-pub(super) struct Solved {
-    /// The last solve's outcome.
-    outcome: SnesOutcome,
+/// What a step's solves counted.
+#[derive(Default)]
+struct Counted {
     augmentations: usize,
     /// Newton and linear iterations of every solve of the step (failed attempts included).
     newton: usize,
     linear: usize,
 }
 
-/// Seconds of a step's solves: assembly, and the rest (the linear solves).
+/// The solves of one step.
+pub(super) struct Solved {
+    /// The last solve's outcome.
+    outcome: SnesOutcome,
+    counted: Counted,
+}
+
+/// Seconds of a step's solves (the predictor's included): their evaluations, and in all.
 #[derive(Clone, Copy)]
 struct StepSeconds {
     assembly: f64,
-    solve: f64,
+    total: f64,
 }
 
 impl Run<'_> {
@@ -77,20 +83,24 @@ impl Run<'_> {
         }
         self.cx.evaluator.borrow_mut().t = t_new;
         let solve_stage = self.phases.push("solve")?;
-        let solved = self.solve_step(t_new);
+        let solved = self.solve_step(t_new)?;
         self.linear.snes.force_iteration(false)?;
         drop(solve_stage);
-        let solved = solved?;
-        self.state.counts.newton += solved.newton;
+        self.state.counts.newton += solved.counted.newton;
         let seconds = self.account_time(started, &timed_before);
         self.check_null_pivots(t_new)?;
-        if !solved.outcome.converged {
-            if let Some(end) = self.failed(&solved, t_new)? {
-                return Ok(end);
-            }
+        if solved.outcome.converged {
+            return self.finish_step(&solved, t_new, seconds, false);
+        }
+        if self.state.stop.get().is_some() {
+            // The run ends at the last finished step, as a failed one does.
+            self.restore()?;
+            return Ok(StepEnd::Stopped);
+        }
+        if self.accepts_unconverged(&solved.outcome)? {
             return self.finish_step(&solved, t_new, seconds, true);
         }
-        self.finish_step(&solved, t_new, seconds, false)
+        self.cut(&solved.outcome, t_new)
     }
 
     /// The contributions whose pattern moves with the displacements add the couplings of the
@@ -147,23 +157,19 @@ impl Run<'_> {
     /// The step's solves: the stick predictor, then attempts and Uzawa augmentations until the
     /// augmented contributions meet their tolerances.
     fn solve_step(&mut self, t_new: f64) -> Result<Solved> {
-        let mut solved = Solved {
-            outcome: not_started(0),
-            augmentations: 0,
-            newton: 0,
-            linear: 0,
-        };
+        let mut counted = Counted::default();
         if self.cx.scene.stick_predictor && self.model.is_frictional() {
-            self.stick_predictor(&mut solved)?;
+            self.stick_predictor(&mut counted)?;
         }
         loop {
-            let outcome = self.attempt(&mut solved)?;
-            solved.newton += outcome.iterations;
-            solved.linear += outcome.linear_iterations;
-            let converged = outcome.converged;
-            solved.outcome = outcome;
-            if !converged || !self.model.is_augmented() || !self.augmented(&mut solved, t_new)? {
-                return Ok(solved);
+            let outcome = self.attempt(&mut counted)?;
+            counted.newton += outcome.iterations;
+            counted.linear += outcome.linear_iterations;
+            if !outcome.converged
+                || !self.model.is_augmented()
+                || !self.augmented(&mut counted, t_new)?
+            {
+                return Ok(Solved { outcome, counted });
             }
             // The new multipliers change the residual by little once the gap is small: still
             // take one Newton step, so that the displacements follow.
@@ -174,7 +180,7 @@ impl Run<'_> {
     /// The stick predictor (see `contact::frictional`): solve with every pressed node
     /// sticking, then release the Coulomb law from there (or from the start, when it did not
     /// converge).
-    fn stick_predictor(&mut self, solved: &mut Solved) -> Result<()> {
+    fn stick_predictor(&mut self, counted: &mut Counted) -> Result<()> {
         let l = &mut self.linear;
         l.x.copy_to(&mut l.x_guess)?;
         self.model.set_stick_all(true);
@@ -186,8 +192,8 @@ impl Run<'_> {
         self.model.set_stick_all(false);
         self.linear.snes.set_max_iterations(max_it)?;
         let pre = pre?;
-        solved.newton += pre.iterations;
-        solved.linear += pre.linear_iterations;
+        counted.newton += pre.iterations;
+        counted.linear += pre.linear_iterations;
         if !pre.converged {
             let l = &mut self.linear;
             l.x_guess.copy_to(&mut l.x)?;
@@ -197,8 +203,8 @@ impl Run<'_> {
 
     /// One attempt at the step's solve: full Newton steps, and with frictional contact, when
     /// they do not converge within [`FULL_STEP_ITERATIONS`], the same solve from the same start
-    /// with the fallback line search (the failed attempt's iterations go to `solved`).
-    fn attempt(&mut self, solved: &mut Solved) -> Result<SnesOutcome> {
+    /// with the fallback line search (the failed attempt's iterations go to `counted`).
+    fn attempt(&mut self, counted: &mut Counted) -> Result<SnesOutcome> {
         let Some(line_search) = self.fallback_line_search else {
             return self.solve_once();
         };
@@ -214,8 +220,8 @@ impl Run<'_> {
         if first.converged || self.state.stop.get().is_some() {
             return Ok(first);
         }
-        solved.newton += first.iterations;
-        solved.linear += first.linear_iterations;
+        counted.newton += first.iterations;
+        counted.linear += first.linear_iterations;
         self.state.counts.fallbacks += 1;
         let l = &mut self.linear;
         l.x_attempt.copy_to(&mut l.x)?;
@@ -259,13 +265,13 @@ impl Run<'_> {
 
     /// After a converged solve: one Uzawa step of the augmented contributions. Returns true
     /// when they updated their multipliers (solve again).
-    fn augmented(&mut self, solved: &mut Solved, t_new: f64) -> Result<bool> {
+    fn augmented(&mut self, counted: &mut Counted, t_new: f64) -> Result<bool> {
         let mut ev = self.cx.evaluator.borrow_mut();
         ev.load(self.cx.scene, &self.cx.dofs, &self.linear.x)?;
         let at = ev.state(self.cx.scene);
         let step = self
             .model
-            .augment(&at, solved.augmentations, &self.cx.world);
+            .augment(&at, counted.augmentations, &self.cx.world);
         match step.outcome {
             Augmented::Converged => Ok(false),
             Augmented::CapReached => {
@@ -276,14 +282,14 @@ impl Run<'_> {
                          after uzawa_max = {} augmentations ({})",
                         self.state.step + 1,
                         Load(t_new),
-                        solved.augmentations,
+                        counted.augmentations,
                         step.violation
                     ));
                 }
                 Ok(false)
             }
             Augmented::Updated => {
-                solved.augmentations += 1;
+                counted.augmentations += 1;
                 Ok(true)
             }
         }
@@ -303,17 +309,12 @@ impl Run<'_> {
         let mut timed = 0.0;
         for (name, now) in self.model.phase_seconds() {
             let spent = now - timed_before.get(name).copied().unwrap_or(0.0);
-            if let Some(&part) = TIMED_PARTS.iter().find(|&&p| p == name) {
-                self.phases.add(part, spent);
-            }
+            self.phases.add(name, spent);
             timed += spent;
         }
         self.phases
             .add("bulk_assembly", (assembly - timed).max(0.0));
-        StepSeconds {
-            assembly,
-            solve: total,
-        }
+        StepSeconds { assembly, total }
     }
 
     /// A singular tangent (the predictor's factorization counts: a linear scene may need no
@@ -330,30 +331,29 @@ impl Run<'_> {
         }
     }
 
-    /// A step whose solve did not converge: stopped by a signal, cut, or given up; `None` when
-    /// it is accepted unconverged (`steps.on_failure = "continue"`: no cut left, and a state
-    /// Newton reached inside the domain).
-    fn failed(&mut self, solved: &Solved, t_new: f64) -> Result<Option<StepEnd>> {
-        let outcome = &solved.outcome;
-        if self.state.stop.get().is_some() {
-            // The run ends at the last finished step, as a failed one does.
-            self.restore()?;
-            return Ok(Some(StepEnd::Stopped));
-        }
+    /// Whether a step whose solve did not converge is accepted as it is
+    /// (`steps.on_failure = "continue"`): no cut left, and a state Newton reached inside the
+    /// domain (*collective*).
+    fn accepts_unconverged(&self, outcome: &SnesOutcome) -> Result<bool> {
+        let (state, scene) = (&self.state, self.cx.scene);
+        Ok(
+            cut_limit(state.cuts_in_row, scene.max_cuts, state.dt, state.dt_min).is_some()
+                && scene.continue_on_failure
+                && outcome.domain_error.is_none()
+                && self.linear.x.norm2()?.is_finite(),
+        )
+    }
+
+    /// A step whose solve did not converge: back to the step's start, and the same step again
+    /// at half the size, or the run gives up when no cut is left.
+    fn cut(&mut self, outcome: &SnesOutcome, t_new: f64) -> Result<StepEnd> {
         let why = outcome
             .domain_error
             .clone()
             .unwrap_or_else(|| outcome.reason.to_string());
-        let (state, scene) = (&self.state, self.cx.scene);
-        let limit = cut_limit(state.cuts_in_row, scene.max_cuts, state.dt, state.dt_min)
-            .map(|limit| describe(&limit, state.dt, scene.max_cuts));
-        let accepted = limit.is_some()
-            && scene.continue_on_failure
-            && outcome.domain_error.is_none()
-            && self.linear.x.norm2()?.is_finite();
-        if accepted {
-            return Ok(None);
-        }
+        let (state, max_cuts) = (&self.state, self.cx.scene.max_cuts);
+        let limit = cut_limit(state.cuts_in_row, max_cuts, state.dt, state.dt_min)
+            .map(|limit| describe(&limit, state.dt, max_cuts));
         self.linear.tangent.newton = NewtonTangent::Other;
         self.state.cut();
         self.restore()?;
@@ -364,7 +364,7 @@ impl Run<'_> {
             outcome.iterations,
             match &limit {
                 Some(limit) => limit.clone(),
-                None => format!("cut {}/{}", self.state.cuts_in_row, scene.max_cuts),
+                None => format!("cut {}/{max_cuts}", self.state.cuts_in_row),
             }
         ));
         if let Some(limit) = limit {
@@ -374,10 +374,10 @@ impl Run<'_> {
                 Load(t_new),
                 self.state.cuts_in_row - 1
             ));
-            return Ok(Some(StepEnd::GaveUp));
+            return Ok(StepEnd::GaveUp);
         }
         self.state.dt *= 0.5;
-        Ok(Some(StepEnd::Cut))
+        Ok(StepEnd::Cut)
     }
 
     /// Back to the state at the step's start.
@@ -456,11 +456,11 @@ impl Run<'_> {
         self.results.push_history(&StepRow {
             step,
             load: t,
-            newton_its: solved.newton,
-            augmentations: solved.augmentations,
+            newton_its: solved.counted.newton,
+            augmentations: solved.counted.augmentations,
             cuts: self.state.cuts_in_row,
             converged: solved.outcome.converged,
-            linear_its: solved.linear,
+            linear_its: solved.counted.linear,
             residual,
             reactions: &reactions,
             u: at.u,
@@ -468,17 +468,17 @@ impl Run<'_> {
             contributions: &self.model.history(),
             seconds: [
                 seconds.assembly,
-                (seconds.solve - seconds.assembly).max(0.0),
+                (seconds.total - seconds.assembly).max(0.0),
                 output_started.elapsed().as_secs_f64(),
             ],
         });
         self.summary.steps.push(StepRecord {
             step,
             load: t,
-            newton_its: solved.newton,
+            newton_its: solved.counted.newton,
             cut: self.state.cuts_in_row,
             converged: solved.outcome.converged,
-            augmentations: solved.augmentations,
+            augmentations: solved.counted.augmentations,
         });
         Ok(())
     }
@@ -497,25 +497,25 @@ impl Run<'_> {
             self.say(format!(
                 "  step {step} load {load:.6}: NOT converged ({}) after {} Newton its, |F| \
                  {residual:.3e}; accepted (steps.on_failure = \"continue\")",
-                solved.outcome.reason, solved.newton
+                solved.outcome.reason, solved.counted.newton
             ));
         }
         let counts = &self.state.counts;
-        let uzawa = match solved.augmentations {
+        let uzawa = match solved.counted.augmentations {
             0 => String::new(),
             n => format!(" ({n} Uzawa augmentations)"),
         };
         self.say(format!(
             "  step {step} load {load:.6}: {} Newton its{uzawa}, |F| {residual:.3e}, {} linear \
              its{}, {:.2} s",
-            solved.newton,
-            solved.linear,
+            solved.counted.newton,
+            solved.counted.linear,
             retries_note(
                 self.state.cuts_in_row,
                 counts.fallbacks - counts.fallbacks_before,
                 self.fallback_line_search
             ),
-            seconds.solve
+            seconds.total
         ));
     }
 }

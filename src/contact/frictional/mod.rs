@@ -126,7 +126,7 @@
 //!
 //! # Stick predictor
 //!
-//! With [`ContactInterfaces::set_stick_all`] every pressed node sticks whatever its cone (the
+//! With the stick predictor on (`Contribution::set_stick_all`) every pressed node sticks whatever its cone (the
 //! law is called with `mu = infinity`): a smooth problem whose solution is a good start for the
 //! Coulomb law, because the nodes that truly stick are already in place and those that slip
 //! start from the direction of the tangential traction that sticking would need. The solver uses
@@ -365,11 +365,6 @@ impl ContactInterfaces {
     /// True when a contact interface has friction.
     pub fn has_friction(&self) -> bool {
         self.interfaces.iter().any(|i| i.mu > 0.0)
-    }
-
-    /// Switches the stick predictor on or off (module docs, "Stick predictor").
-    pub fn set_stick_all(&self, on: bool) {
-        self.stick_all.set(on);
     }
 
     /// True when the scene has no contact interface.

@@ -129,13 +129,13 @@ impl Slots {
     /// pairs `terms`, the values `lin` and the applied traction `t`.
     pub(crate) fn add_tangent(
         &mut self,
-        at: (&ContactPass, &EvalContext, &NodalNormals),
+        evaluated: (&ContactPass, &EvalContext, &NodalNormals),
         node: usize,
         terms: &[(&PairData, usize)],
         lin: &Linearization,
         t: [f64; 3],
     ) {
-        let (pass, ctx, normals) = at;
+        let (pass, ctx, normals) = evaluated;
         let d = self.differentials(pass, ctx, normals, node, terms, lin.friction.is_some());
         let ds_over_s = self.scale_differential(lin, &d.da);
         let dp = pressure_differential(lin, &d, &ds_over_s);
