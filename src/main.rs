@@ -5,6 +5,7 @@
 //! mortar check CASE.toml
 //! mortar study STUDY.toml [--out DIR] [--quiet] [PETSc options...]
 //! mortar scaling LOG_1 LOG_2 ... [--out DIR]
+//! mortar family RUN_DIR ... [--out DIR]
 //! ```
 //!
 //! Options with two dashes are ours; everything after the case file that is not ours goes to
@@ -87,6 +88,18 @@ enum Command {
         #[arg(required = true, num_args = 2..)]
         logs: Vec<PathBuf>,
         /// Output folder. Default: out/scaling.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// What refinement costs, from the output folders of runs of a refinement family
+    /// (cases/refinement): per run the dofs, Newton and linear iterations, seconds per phase
+    /// and peak memory; the exponents of the costs between sizes; the speedups between rank
+    /// counts of a size; family.csv.
+    Family {
+        /// The runs' output folders (each with summary.json and history.csv).
+        #[arg(required = true)]
+        runs: Vec<PathBuf>,
+        /// Output folder. Default: out/family.
         #[arg(long)]
         out: Option<PathBuf>,
     },
@@ -226,6 +239,14 @@ fn execute(cli: Cli, program: String) -> Result<()> {
                 println!("speedup per Newton iteration: {s:.2}");
             }
             println!("speedup: {:.2}", scaling.speedup(last));
+            Ok(())
+        }
+        Command::Family { runs, out } => {
+            let family = mortar::family::Family::read(&runs)?;
+            let out = out.unwrap_or_else(|| PathBuf::from("out/family"));
+            let csv = family.write(&out)?;
+            print!("{}", family.report());
+            println!("mortar: {}", csv.display());
             Ok(())
         }
     }

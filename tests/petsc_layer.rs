@@ -20,7 +20,7 @@
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 use mortar::petsc::snes::Tolerances;
-use mortar::petsc::{CallbackError, Ksp, Matrix, Petsc, Snes, Sparsity, Vector};
+use mortar::petsc::{CallbackError, Ksp, LinearPath, Matrix, Petsc, Snes, Sparsity, Vector};
 use mortar::Error;
 
 #[path = "petsc_checks/owned_rows.rs"]
@@ -77,7 +77,7 @@ fn petsc_layer_boundary_behaviour() {
     assert_eq!(petsc.size(), 1);
     let mut x = Vector::new_mpi(N).unwrap();
     let mut jac = Matrix::new_aij(&diagonal_pattern()).unwrap();
-    let mut snes = Snes::new(tolerances(), "test", "basic").unwrap();
+    let mut snes = Snes::new(tolerances(), "test", "basic", LinearPath::Direct).unwrap();
 
     converging_solve(&mut snes, &mut x, &mut jac);
     panic_in_the_residual_is_reraised(&mut snes, &mut x, &mut jac);

@@ -466,6 +466,32 @@ pub struct NewtonSpec {
     /// Maximum Newton iterations per step. Default 25.
     #[serde(default = "default_max_it")]
     pub max_it: usize,
+    /// The linear solver of the Newton steps: `"direct"` (LU through MUMPS), `"iterative"`
+    /// (GMRES with algebraic multigrid and an exact solve on the interfaces' dofs), or
+    /// `"auto"` (the default: direct below `direct_below` free dofs, iterative from there on).
+    /// PETSc's `-ksp_type` and `-pc_type` options replace the choice.
+    #[serde(default)]
+    pub linear_solver: LinearSolverSpec,
+    /// The free dofs from which `linear_solver = "auto"` solves iteratively. Default
+    /// `crate::solver::DIRECT_BELOW`, the crossover measured on the refinement family
+    /// (docs/performance.md, "Linear solver and predictor").
+    #[serde(default = "default_direct_below")]
+    pub direct_below: usize,
+}
+
+fn default_direct_below() -> usize {
+    crate::solver::DIRECT_BELOW
+}
+
+/// The linear solver a case asks for (`newton.linear_solver`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LinearSolverSpec {
+    /// Chosen by the number of free dofs.
+    #[default]
+    Auto,
+    Direct,
+    Iterative,
 }
 
 impl Default for NewtonSpec {
@@ -474,6 +500,8 @@ impl Default for NewtonSpec {
             rtol: default_rtol(),
             atol: default_atol(),
             max_it: default_max_it(),
+            linear_solver: LinearSolverSpec::Auto,
+            direct_below: default_direct_below(),
         }
     }
 }

@@ -25,13 +25,14 @@ pub struct Ksp {
 }
 
 impl Ksp {
-    /// A linear solver configured from the options database (after the project's defaults).
+    /// A linear solver configured from the options database (after the project's defaults for
+    /// a direct solve).
     pub fn new() -> Result<Ksp> {
         super::ensure_initialized()?;
         let mut raw: p::KSP = std::ptr::null_mut();
         chk!(KSPCreate(super::comm(), &mut raw))?;
         let ksp = Ksp { raw };
-        set_linear_solver_defaults()?;
+        set_linear_solver_defaults(LinearPath::Direct)?;
         chk!(KSPSetFromOptions(ksp.raw))?;
         Ok(ksp)
     }
@@ -65,13 +66,66 @@ impl Drop for Ksp {
     }
 }
 
+/// The linear solver of the Newton steps, when the options choose none.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LinearPath {
+    /// LU through MUMPS.
+    Direct,
+    /// GMRES preconditioned by algebraic multigrid (GAMG, with the matrix's near null space).
+    /// With `interface_split`, a multiplicative field split: the interface dofs solved exactly
+    /// (LU through MUMPS), then multigrid on the other dofs
+    /// ([`super::Snes::split_interface`] names the fields).
+    Iterative { interface_split: bool },
+}
+
+/// The options of the iterative path ([`LinearPath::Iterative`]), each a default the user's
+/// options replace.
+const ITERATIVE: [(&str, &str); 4] = [
+    ("-ksp_type", "gmres"),
+    ("-ksp_gmres_restart", "100"),
+    ("-ksp_rtol", "1e-8"),
+    ("-ksp_max_it", "1000"),
+];
+
+/// The field split of [`LinearPath::Iterative`] with interfaces.
+const INTERFACE_SPLIT: [(&str, &str); 7] = [
+    ("-pc_type", "fieldsplit"),
+    ("-pc_fieldsplit_type", "multiplicative"),
+    ("-fieldsplit_interface_ksp_type", "preonly"),
+    ("-fieldsplit_interface_pc_type", "lu"),
+    ("-fieldsplit_interface_pc_factor_mat_solver_type", "mumps"),
+    ("-fieldsplit_bulk_ksp_type", "preonly"),
+    ("-fieldsplit_bulk_pc_type", "gamg"),
+];
+
+/// Every option [`set_linear_solver_defaults`] may set (restored after each run of a study:
+/// `options::Override`).
+pub(crate) fn defaulted_options() -> impl Iterator<Item = &'static str> {
+    ["-pc_factor_mat_solver_type", "-mat_mumps_icntl_24"]
+        .into_iter()
+        .chain(ITERATIVE.iter().chain(&INTERFACE_SPLIT).map(|o| o.0))
+}
+
 /// The default linear solver, as option defaults so that any user choice replaces it whole:
-/// with neither `-ksp_type` nor `-pc_type` given, a direct solve (`preonly`, `lu`, MUMPS, with
-/// null-pivot detection); with
-/// only `-pc_type`, GMRES around it; with only `-ksp_type`, LU through MUMPS inside it.
-pub(crate) fn set_linear_solver_defaults() -> Result<()> {
+/// with neither `-ksp_type` nor `-pc_type` given, `path`: a direct solve (`preonly`, `lu`,
+/// MUMPS, with null-pivot detection), or the iterative path; with only `-pc_type`, GMRES
+/// around it; with only `-ksp_type`, LU through MUMPS inside it.
+pub(crate) fn set_linear_solver_defaults(path: LinearPath) -> Result<()> {
     use super::options::{has, set_default};
     let (ksp, pc) = (has("-ksp_type")?, has("-pc_type")?);
+    if let (false, false, LinearPath::Iterative { interface_split }) = (ksp, pc, path) {
+        for (name, value) in ITERATIVE {
+            set_default(name, value)?;
+        }
+        if interface_split {
+            for (name, value) in INTERFACE_SPLIT {
+                set_default(name, value)?;
+            }
+        } else {
+            set_default("-pc_type", "gamg")?;
+        }
+        return Ok(());
+    }
     if !pc {
         set_default("-pc_type", "lu")?;
         set_default("-pc_factor_mat_solver_type", "mumps")?;

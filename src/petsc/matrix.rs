@@ -197,36 +197,9 @@ impl Matrix {
     /// orthonormalized here (modified Gram-Schmidt), as PETSc requires. A mode that is
     /// (numerically) in the span of the earlier ones is dropped. Collective.
     pub fn set_near_null_space(&mut self, modes: &[Vec<f64>]) -> Result<()> {
-        let mut basis: Vec<super::Vector> = Vec::with_capacity(modes.len());
-        for mode in modes {
-            let mut v = super::Vector::new_mpi(mode.len())?;
-            v.with_local_mut(|local| local.copy_from_slice(mode))?;
-            let size = v.norm2()?;
-            for b in &basis {
-                let along = v.dot(b)?;
-                v.axpy(-along, b)?;
-            }
-            let rest = v.norm2()?;
-            // The same decision on every rank: the norms are global.
-            if rest <= 1e-10 * size || rest == 0.0 {
-                continue;
-            }
-            v.scale(1.0 / rest)?;
-            basis.push(v);
-        }
-        let raw: Vec<p::Vec> = basis.iter().map(|v| v.raw).collect();
-        let mut space: p::MatNullSpace = std::ptr::null_mut();
-        chk!(MatNullSpaceCreate(
-            super::comm(),
-            p::PetscBool::PETSC_FALSE,
-            to_petsc_int(raw.len())?,
-            raw.as_ptr(),
-            &mut space
-        ))?;
-        // The matrix takes its own reference to the space, the space to the vectors.
-        let attached = chk!(MatSetNearNullSpace(self.raw, space));
-        chk!(MatNullSpaceDestroy(&mut space))?;
-        attached
+        let space = NullSpace::of(modes)?;
+        // The matrix takes its own reference to the space.
+        chk!(MatSetNearNullSpace(self.raw, space.raw))
     }
 
     /// `y = A x`.
@@ -262,6 +235,59 @@ impl Drop for Matrix {
         let code = unsafe { p::MatDestroy(&mut self.raw) };
         if code != 0 {
             crate::error::print_warning(format_args!("MatDestroy returned error code {code}"));
+        }
+    }
+}
+
+/// A (near) null space of vectors; destroyed on drop (the objects it is given to keep their own
+/// references).
+pub struct NullSpace {
+    pub(crate) raw: p::MatNullSpace,
+}
+
+impl NullSpace {
+    /// The space spanned by `modes` (each the owned rows of one vector), orthonormalized here
+    /// (modified Gram-Schmidt), as PETSc requires; a mode that is (numerically) in the span of
+    /// the earlier ones is dropped. Collective.
+    pub fn of(modes: &[Vec<f64>]) -> Result<NullSpace> {
+        let mut basis: Vec<super::Vector> = Vec::with_capacity(modes.len());
+        for mode in modes {
+            let mut v = super::Vector::new_mpi(mode.len())?;
+            v.with_local_mut(|local| local.copy_from_slice(mode))?;
+            let size = v.norm2()?;
+            for b in &basis {
+                let along = v.dot(b)?;
+                v.axpy(-along, b)?;
+            }
+            let rest = v.norm2()?;
+            // The same decision on every rank: the norms are global.
+            if rest <= 1e-10 * size || rest == 0.0 {
+                continue;
+            }
+            v.scale(1.0 / rest)?;
+            basis.push(v);
+        }
+        let raw: Vec<p::Vec> = basis.iter().map(|v| v.raw).collect();
+        let mut space: p::MatNullSpace = std::ptr::null_mut();
+        chk!(MatNullSpaceCreate(
+            super::comm(),
+            p::PetscBool::PETSC_FALSE,
+            to_petsc_int(raw.len())?,
+            raw.as_ptr(),
+            &mut space
+        ))?;
+        Ok(NullSpace { raw: space })
+    }
+}
+
+impl Drop for NullSpace {
+    fn drop(&mut self) {
+        // SAFETY: `raw` is a valid MatNullSpace owned by this struct.
+        let code = unsafe { p::MatNullSpaceDestroy(&mut self.raw) };
+        if code != 0 {
+            crate::error::print_warning(format_args!(
+                "MatNullSpaceDestroy returned error code {code}"
+            ));
         }
     }
 }

@@ -15,6 +15,7 @@
 //! asserts both against what PETSc was compiled with.
 
 mod error;
+mod index_set;
 mod init;
 mod ksp;
 pub mod log;
@@ -26,9 +27,10 @@ pub mod snes;
 mod vector;
 
 pub use error::check;
+pub use index_set::IndexSet;
 pub use init::{start_mpi, Petsc};
-pub use ksp::{Ksp, KspOutcome};
-pub use matrix::{Matrix, Sparsity};
+pub use ksp::{Ksp, KspOutcome, LinearPath};
+pub use matrix::{Matrix, NullSpace, Sparsity};
 pub use owned_rows::OwnedRows;
 pub use scatter::Scatter;
 pub use snes::{CallbackError, Snes, SnesOutcome};

@@ -106,13 +106,9 @@ pub fn overridden() -> bool {
 /// The options a run may write into the database as defaults ([`set_default`]: the linear
 /// solver's, `ksp::set_linear_solver_defaults`, and the stash of a matrix on more than one rank,
 /// `matrix::Matrix::new_aij`), restored with a study variant's own options ([`Override`]).
-pub(crate) const DEFAULTED_OPTIONS: [&str; 5] = [
-    "-pc_type",
-    "-pc_factor_mat_solver_type",
-    "-mat_mumps_icntl_24",
-    "-ksp_type",
-    "-matstash_legacy",
-];
+fn defaulted_options() -> impl Iterator<Item = &'static str> {
+    super::ksp::defaulted_options().chain(["-matstash_legacy"])
+}
 
 /// Options set for a while (a study variant's runs): [`Override::set`] puts each `-name value`
 /// into the database, over the options file and the command line, remembering what was there;
@@ -120,7 +116,7 @@ pub(crate) const DEFAULTED_OPTIONS: [&str; 5] = [
 /// with its mark of having been read, so that PETSc's count of unused options stays true. The
 /// defaults a run writes into the database when the user chose none (the linear solver's,
 /// `ksp::set_linear_solver_defaults`, and the stash of a matrix on more than one rank,
-/// `matrix::Matrix::new_aij`; `DEFAULTED_OPTIONS`) are put back too, so that they follow
+/// `matrix::Matrix::new_aij`; `defaulted_options`) are put back too, so that they follow
 /// each run's own options and never leak from one run into the next.
 #[derive(Debug)]
 pub struct Override {
@@ -162,7 +158,7 @@ impl Override {
         if guard.counted {
             OVERRIDES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         }
-        for name in DEFAULTED_OPTIONS {
+        for name in defaulted_options() {
             let n = CString::new(name).expect("option names have no NUL");
             let saved = Saved::of(&n)?;
             guard.previous.push((n, saved));

@@ -142,7 +142,12 @@ impl Snes {
     /// (`ksp::probe_factorization`), so that every option is checked before the first
     /// step. `options_source` names where the options came from, for the error message when
     /// one is invalid. Collective.
-    pub fn new(tol: Tolerances, options_source: &str, line_search: &str) -> Result<Snes> {
+    pub fn new(
+        tol: Tolerances,
+        options_source: &str,
+        line_search: &str,
+        path: super::ksp::LinearPath,
+    ) -> Result<Snes> {
         super::ensure_initialized()?;
         let mut raw: p::SNES = std::ptr::null_mut();
         chk!(SNESCreate(super::comm(), &mut raw))?;
@@ -160,7 +165,7 @@ impl Snes {
             snes.raw,
             p::PetscBool::PETSC_TRUE
         ))?;
-        super::ksp::set_linear_solver_defaults()?;
+        super::ksp::set_linear_solver_defaults(path)?;
         chk!(SNESSetTolerances(
             snes.raw,
             tol.atol,
@@ -329,6 +334,43 @@ impl Snes {
         let c = std::ffi::CString::new(name)
             .map_err(|_| Error::Solve(format!("bad line search name {name:?}")))?;
         chk!(SNESLineSearchSetType(ls, c.as_ptr()))
+    }
+
+    /// Names the two fields of a field-split preconditioner (`-pc_type fieldsplit`; returns
+    /// false and does nothing for another): `interface`, the owned global dofs `interface`
+    /// (sorted), and `bulk`, the other owned dofs `[start, start + count)`, with `modes` (the
+    /// near null space of the whole matrix, owned rows) restricted to them as the bulk's near
+    /// null space, for multigrid. Before the first solve. Collective.
+    pub fn split_interface(
+        &mut self,
+        interface: &[PetscInt],
+        (start, count): (usize, usize),
+        modes: &[Vec<f64>],
+    ) -> Result<bool> {
+        let (pc, pc_type) = self.preconditioner()?;
+        if pc_type != "fieldsplit" {
+            return Ok(false);
+        }
+        let mut in_interface = vec![false; count];
+        for &g in interface {
+            in_interface[g as usize - start] = true;
+        }
+        let bulk_rows: Vec<usize> = (0..count).filter(|&k| !in_interface[k]).collect();
+        let bulk: Vec<PetscInt> = bulk_rows.iter().map(|&k| (start + k) as PetscInt).collect();
+        let bulk_modes: Vec<Vec<f64>> = modes
+            .iter()
+            .map(|m| bulk_rows.iter().map(|&k| m[k]).collect())
+            .collect();
+        let interface_set = super::IndexSet::new(interface)?;
+        let bulk_set = super::IndexSet::new(&bulk)?;
+        bulk_set.attach_near_null_space(&super::matrix::NullSpace::of(&bulk_modes)?)?;
+        chk!(PCFieldSplitSetIS(
+            pc,
+            c"interface".as_ptr(),
+            interface_set.raw
+        ))?;
+        chk!(PCFieldSplitSetIS(pc, c"bulk".as_ptr(), bulk_set.raw))?;
+        Ok(true)
     }
 
     /// The largest number of Newton iterations of the next solves (the other tolerances are

@@ -43,6 +43,7 @@ mod assembly;
 mod collective;
 mod cut;
 mod evaluation;
+mod linear;
 mod predictor;
 mod results;
 mod setup;
@@ -68,6 +69,7 @@ use crate::petsc::{Matrix, Petsc, Snes, Vector};
 
 pub(crate) use collective::agree_on;
 pub use collective::lowest_rank_with;
+pub use linear::DIRECT_BELOW;
 
 use assembly::Pattern;
 use evaluation::Evaluator;
@@ -154,6 +156,8 @@ struct Linear {
     x_attempt: Vector,
     snes: Snes,
     tangent: Tangent,
+    /// The linear solver of the Newton steps, and why.
+    choice: linear::LinearChoice,
 }
 
 /// Runs a scene; returns the summary (also written to `summary.json`).
@@ -168,6 +172,7 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         run.cx.dofs.total_free,
         scene.steps
     ));
+    run.say(format!("  linear solver: {}", run.linear.choice.why));
     // Everything from here may fail on one rank only (I/O, say) while the others wait in a
     // collective call; such an error aborts the job *here*, while the PETSc objects are alive:
     // destroying them (MUMPS in particular) is itself collective and would hang.

@@ -21,6 +21,7 @@ use crate::solid::Bulk;
 
 use super::assembly::Pattern;
 use super::evaluation::{Evaluation, Evaluator};
+use super::linear;
 use super::predictor::{NewtonTangent, Tangent};
 use super::results::Results;
 use super::state::RunState;
@@ -123,6 +124,8 @@ impl Linear {
         x.set_all(0.0)?;
         let ev = Evaluation { cx, model };
         let force_scale = residual_scale(&ev, &x)?;
+        let interfaces = model.parts().len() > 1;
+        let choice = linear::choose(scene, dofs.total_free, interfaces)?;
         let mut snes = Snes::new(
             Tolerances {
                 atol: scene.newton.atol * force_scale,
@@ -132,11 +135,15 @@ impl Linear {
             },
             &options_source(scene),
             "basic",
+            choice.path,
         )?;
+        let owned = (dofs.owned_start, dofs.owned_count);
+        snes.split_interface(&linear::interface_dofs(model, dofs), owned, &rigid_modes)?;
         if scene.is_linear() {
             snes.freeze_jacobian()?;
         }
         Ok(Linear {
+            choice,
             pattern,
             rigid_modes,
             jac,

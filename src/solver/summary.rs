@@ -168,6 +168,7 @@ impl super::Run<'_> {
             self.cx.dofs.total_free,
         );
         self.summary.timings = self.phases.timings();
+        self.summary.peak_memory_mb = peak_memory_of_ranks(&self.cx.world);
         if self.cx.rank == 0 {
             self.results.write_summary(&self.summary);
         }
@@ -197,6 +198,20 @@ impl super::Run<'_> {
             totals(summary, &self.state, self.started.elapsed().as_secs_f64()),
             self.cx.opts.out_dir.display()
         )
+    }
+}
+
+/// The peak resident memory of every rank, in MB (*collective*); empty when a rank cannot say.
+fn peak_memory_of_ranks(world: &mpi::topology::SimpleCommunicator) -> Vec<f64> {
+    use mpi::collective::CommunicatorCollectives;
+    use mpi::topology::Communicator;
+    let mine = crate::memory::peak_mb().unwrap_or(-1.0);
+    let mut all = vec![0.0; world.size() as usize];
+    world.all_gather_into(&mine, &mut all[..]);
+    if all.iter().any(|&m| m < 0.0) {
+        Vec::new()
+    } else {
+        all
     }
 }
 

@@ -328,7 +328,7 @@ fn fresh_run_dir(petsc: &Petsc, run_dir: &Path) -> Result<()> {
     }
     petsc.world().barrier();
     petsc.release_free_memory();
-    reset_peak_memory();
+    crate::memory::reset_peak();
     Ok(())
 }
 
@@ -336,25 +336,10 @@ fn fresh_run_dir(petsc: &Petsc, run_dir: &Path) -> Result<()> {
 /// part); `None` where a rank cannot read it.
 fn peak_memory_over_ranks(petsc: &Petsc) -> Option<f64> {
     // -1: not available there.
-    let local = peak_memory_mb().unwrap_or(-1.0);
+    let local = crate::memory::peak_mb().unwrap_or(-1.0);
     let mut most = 0.0f64;
     petsc
         .world()
         .all_reduce_into(&local, &mut most, SystemOperation::max());
     (most >= 0.0).then_some(most)
-}
-
-/// Resets the process's peak resident memory (`VmHWM`), where Linux allows it
-/// (`/proc/self/clear_refs`, value 5); otherwise the peak read after a run is the process's.
-fn reset_peak_memory() {
-    let _ = std::fs::write("/proc/self/clear_refs", "5");
-}
-
-/// The process's peak resident memory since the last reset, in MB (`VmHWM` of
-/// `/proc/self/status`).
-fn peak_memory_mb() -> Option<f64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb / 1024.0)
 }

@@ -40,6 +40,10 @@ pub struct Summary {
     /// Why the run failed or stopped (a step that did not converge, an interruption, the error
     /// that ended it), if it did.
     pub message: Option<String>,
+    /// Peak resident memory of each rank's process, in MB (`crate::memory`), at the end of the
+    /// run; empty where the system does not say.
+    #[serde(default)]
+    pub peak_memory_mb: Vec<f64>,
 }
 
 impl Summary {
@@ -111,6 +115,7 @@ mod tests {
             timings: [("assembly".to_string(), 1.25), ("solve".to_string(), 3e-3)].into(),
             metrics: [("max_penetration".to_string(), -1.5e-9)].into(),
             message: Some("Newton diverged in step 2".into()),
+            peak_memory_mb: vec![512.5, 498.0],
         }
     }
 

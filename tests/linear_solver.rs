@@ -1,0 +1,104 @@
+//! The linear solver of the Newton steps (`newton.linear_solver`, `newton.direct_below`).
+//!
+//! - The automatic choice: the frictional slide of `common::slide_case` solved directly below
+//!   the crossover and iteratively from it on, as its first lines say; both converge to the same
+//!   state.
+//! - The iterative path on the smallest level of the refinement family
+//!   (`cases/refinement/hex8_1.toml`, 8 028 free dofs; release mode:
+//!   `cargo test --release --test linear_solver`): GMRES with an exact solve on the interface's
+//!   dofs and multigrid on the rest converges every load step with at most
+//!   [`MAX_LINEAR_PER_NEWTON`] linear iterations per Newton iteration and at most 25 % more
+//!   Newton iterations than the direct solve, to the direct solve's state within the Newton
+//!   tolerance (1e-8 relative), and to the same state on 1 and 2 ranks.
+
+mod common;
+
+use std::path::PathBuf;
+
+/// The bound on the linear iterations per Newton iteration of any step of the smallest level
+/// (measured: 24-51, docs/performance.md, "Linear solver and predictor").
+const MAX_LINEAR_PER_NEWTON: f64 = 60.0;
+
+/// `text` with `settings` in its `[newton]` section (the case has none).
+fn with_newton(text: &str, settings: &str) -> String {
+    text.replace("[steps]", &format!("[newton]\n{settings}\n[steps]"))
+}
+
+/// The case `text` written into a fresh folder named `name`.
+fn case(name: &str, text: &str) -> PathBuf {
+    common::write_case(name, text)
+}
+
+#[test]
+fn auto_solves_directly_below_the_crossover_and_iteratively_from_it() {
+    let slide = common::slide_case(4);
+    let below = case(
+        "auto_direct",
+        &with_newton(&slide, "direct_below = 1000000"),
+    );
+    let above = case("auto_iterative", &with_newton(&slide, "direct_below = 1"));
+    let (direct, printed) = common::run_case(&below, 1, &[]);
+    assert!(
+        printed.contains("linear solver: direct (LU through MUMPS): "),
+        "{printed}"
+    );
+    let (iterative, printed) = common::run_case(&above, 1, &[]);
+    assert!(
+        printed.contains("linear solver: iterative (GMRES; an exact solve on the interfaces'"),
+        "{printed}"
+    );
+    let d = common::max_rel_difference_of_runs(&direct, &iterative);
+    assert!(d < 1e-8, "iterative against direct: {d:e}");
+}
+
+/// Linear iterations per Newton iteration of every step of a run (steps without a Newton
+/// iteration left out).
+fn linear_per_newton(out: &std::path::Path) -> Vec<f64> {
+    let history = common::History::read(out);
+    let (newton, linear) = (history.column("newton_its"), history.column("linear_its"));
+    history
+        .rows()
+        .iter()
+        .filter(|r| r[newton] > 0.0)
+        .map(|r| r[linear] / r[newton])
+        .collect()
+}
+
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "release only: cargo test --release --test linear_solver"
+)]
+fn the_iterative_path_solves_the_smallest_level_as_the_direct_one() {
+    let level = common::scene_dir("refinement").join("hex8_1.toml");
+    let text = std::fs::read_to_string(&level).unwrap();
+    let direct = case(
+        "level1_direct",
+        &with_newton(&text, "linear_solver = \"direct\""),
+    );
+    let iterative = case(
+        "level1_iterative",
+        &with_newton(&text, "linear_solver = \"iterative\""),
+    );
+    let (direct_out, _) = common::run_case(&direct, 1, &["-q"]);
+    let (iter1, _) = common::run_case(&iterative, 1, &["-q"]);
+    let (iter2, _) = common::run_case(&iterative, 2, &["-q"]);
+    for (out, ranks) in [(&iter1, 1), (&iter2, 2)] {
+        let per_newton = linear_per_newton(out);
+        let most = per_newton.iter().copied().fold(0.0, f64::max);
+        assert!(
+            most <= MAX_LINEAR_PER_NEWTON,
+            "{ranks} rank(s): {most} linear iterations per Newton iteration ({per_newton:?})"
+        );
+        let newton = common::metric(out, "total_newton_its");
+        let newton_direct = common::metric(&direct_out, "total_newton_its");
+        assert!(
+            newton <= 1.25 * newton_direct,
+            "{ranks} rank(s): {newton} Newton iterations against {newton_direct} (direct)"
+        );
+        let d = common::max_rel_difference_of_runs(&direct_out, out);
+        assert!(d < 1e-8, "{ranks} rank(s) against the direct solve: {d:e}");
+    }
+    let d = common::max_rel_difference_of_runs(&iter1, &iter2);
+    assert!(d < 1e-8, "1 against 2 ranks: {d:e}");
+}
