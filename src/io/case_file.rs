@@ -474,13 +474,10 @@ pub struct NewtonSpec {
     pub linear_solver: LinearSolverSpec,
     /// The free dofs from which `linear_solver = "auto"` solves iteratively. Default
     /// `crate::solver::DIRECT_BELOW`, the crossover measured on the refinement family
-    /// (docs/performance.md, "Linear solver and predictor").
-    #[serde(default = "default_direct_below")]
-    pub direct_below: usize,
-}
-
-fn default_direct_below() -> usize {
-    crate::solver::DIRECT_BELOW
+    /// (docs/performance.md, "Refinement"), and `crate::solver::LINEAR_DIRECT_BELOW` for a
+    /// linear scene (factorized once for the whole run).
+    #[serde(default)]
+    pub direct_below: Option<usize>,
 }
 
 /// The linear solver a case asks for (`newton.linear_solver`).
@@ -501,7 +498,7 @@ impl Default for NewtonSpec {
             atol: default_atol(),
             max_it: default_max_it(),
             linear_solver: LinearSolverSpec::Auto,
-            direct_below: default_direct_below(),
+            direct_below: None,
         }
     }
 }

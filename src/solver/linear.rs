@@ -16,6 +16,10 @@ use crate::petsc::{options, LinearPath, PetscInt};
 /// The free dofs from which `newton.linear_solver = "auto"` solves iteratively.
 pub const DIRECT_BELOW: usize = 20_000;
 
+/// [`DIRECT_BELOW`] for a linear scene: its tangent is factorized once for the whole run, so
+/// the direct solve stays the faster far longer, until its memory grows too large.
+pub const LINEAR_DIRECT_BELOW: usize = 150_000;
+
 /// The linear solver of a run, and why, for its first lines.
 #[derive(Debug, Clone)]
 pub(super) struct LinearChoice {
@@ -27,7 +31,13 @@ pub(super) struct LinearChoice {
 /// (the iterative path then splits their dofs off).
 pub(super) fn choose(scene: &Scene, free_dofs: usize, interfaces: bool) -> Result<LinearChoice> {
     let from_options = options::has("-ksp_type")? || options::has("-pc_type")?;
-    let spec = (scene.newton.linear_solver, scene.newton.direct_below);
+    let default_below = if scene.is_linear() {
+        LINEAR_DIRECT_BELOW
+    } else {
+        DIRECT_BELOW
+    };
+    let below = scene.newton.direct_below.unwrap_or(default_below);
+    let spec = (scene.newton.linear_solver, below);
     Ok(decide(spec, free_dofs, interfaces, from_options))
 }
 
