@@ -122,3 +122,43 @@ fn parted_bodies_keep_their_contact_metrics() {
     assert!(!metrics.contains_key("max_relative_gap"), "{metrics:?}");
     assert_eq!(common::metric(&out, "pairs_slide_pairs_integrated"), 0.0);
 }
+
+/// The law state changes of every step (history column `contact_slide_state_changes`, the sum
+/// over the step's Newton iterations of the nodes that changed between open, stick and slip)
+/// account at least for the change of the converged step's stick and slip counts: every
+/// pressed node of the first step closed from open, and every node that went from stick to
+/// slip between two steps changed at least once. The counts are the same on 1 and 2 ranks.
+#[test]
+fn state_changes_account_for_the_stick_and_slip_counts() {
+    let case = common::write_case("contact_state_changes", &common::slide_case(5));
+    let mut per_ranks = Vec::new();
+    for ranks in [1, 2] {
+        let (out, _) = common::run_case(&case, ranks, &["-q"]);
+        let history = common::History::read(&out);
+        let (changes, stick, slip) = (
+            history.column("contact_slide_state_changes"),
+            history.column("contact_slide_stick"),
+            history.column("contact_slide_slip"),
+        );
+        let rows = history.rows();
+        let mut before = (0.0, 0.0);
+        for r in &rows {
+            let least = (r[stick] + r[slip] - before.0 - before.1)
+                .abs()
+                .max((r[slip] - before.1).abs());
+            assert!(
+                r[changes] >= least && r[changes].fract() == 0.0,
+                "{ranks} rank(s): {} changes for stick {} -> {}, slip {} -> {}",
+                r[changes],
+                before.0,
+                r[stick],
+                before.1,
+                r[slip]
+            );
+            before = (r[stick], r[slip]);
+        }
+        assert!(rows[0][changes] > 0.0, "no node closed in the first step");
+        per_ranks.push(rows.iter().map(|r| r[changes]).collect::<Vec<_>>());
+    }
+    assert_eq!(per_ranks[0], per_ranks[1], "1 against 2 ranks");
+}

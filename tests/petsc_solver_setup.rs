@@ -91,3 +91,22 @@ fn algebraic_multigrid_gets_the_rigid_body_modes() {
         );
     }
 }
+
+/// Inexact Newton (`-snes_ksp_ew`, Eisenstat-Walker's linear tolerances) with the load-step
+/// predictor, whose linear solve runs outside a Newton solve (it crashed PETSc there): the
+/// frictional slide converges to the state of the default solve within the Newton tolerance,
+/// on 1 and 2 ranks.
+#[test]
+fn inexact_newton_runs_with_the_predictor() {
+    let case = common::write_case("inexact_newton", &common::slide_case(4));
+    let (exact, _) = common::run_case(&case, 1, &["-q"]);
+    let inexact = ["-q", "-snes_ksp_ew", "-ksp_type", "gmres", "-pc_type", "lu"];
+    for ranks in [1, 2] {
+        let (out, _) = common::run_case(&case, ranks, &inexact);
+        let d = common::max_rel_difference_of_runs(&exact, &out);
+        assert!(
+            d < 1e-8,
+            "{ranks} rank(s): {d:e} from the exact linear solves"
+        );
+    }
+}

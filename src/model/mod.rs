@@ -273,6 +273,12 @@ pub trait Contribution {
     /// The stick predictor: every pressed node sticks whatever its Coulomb cone while on.
     fn set_stick_all(&self, _on: bool) {}
 
+    /// Lines on the last Newton iteration's state of this contribution, for the
+    /// `-contact_monitor` option (*collective*; only rank 0's are printed).
+    fn iteration_report(&self, _world: &SimpleCommunicator) -> Vec<String> {
+        Vec::new()
+    }
+
     /// The names of this contribution's history columns (`history.csv`).
     fn history_columns(&self) -> Vec<String> {
         Vec::new()
@@ -368,6 +374,14 @@ impl Model {
     /// [`Contribution::commit`] of every part (*collective*).
     pub fn commit(&mut self, at: &State, world: &SimpleCommunicator) {
         self.parts.iter_mut().for_each(|c| c.commit(at, world));
+    }
+
+    /// [`Contribution::iteration_report`] of every part (*collective*).
+    pub fn iteration_report(&self, world: &SimpleCommunicator) -> Vec<String> {
+        self.parts
+            .iter()
+            .flat_map(|c| c.iteration_report(world))
+            .collect()
     }
 
     /// The history columns of every part, in order.

@@ -133,6 +133,18 @@ struct Context<'a> {
 pub struct Snes {
     raw: p::SNES,
     history: Vec<f64>,
+    /// The convergence test's state ([`Snes::stop_on_cycling`]); boxed, as PETSc holds its
+    /// address.
+    cycling: Box<Cycling>,
+}
+
+/// The last residual norms of a solve, for [`Snes::stop_on_cycling`].
+#[derive(Default)]
+struct Cycling {
+    /// The least progress over two iterations (`None`: never stop).
+    progress: Option<f64>,
+    /// The norms of the last two iterations, the latest first.
+    last: [f64; 2],
 }
 
 impl Snes {
@@ -151,10 +163,18 @@ impl Snes {
         super::ensure_initialized()?;
         let mut raw: p::SNES = std::ptr::null_mut();
         chk!(SNESCreate(super::comm(), &mut raw))?;
-        let snes = Snes {
+        let mut snes = Snes {
             raw,
             history: Vec::new(),
+            cycling: Box::default(),
         };
+        let cycling = &mut *snes.cycling as *mut Cycling as *mut c_void;
+        chk!(SNESSetConvergenceTest(
+            snes.raw,
+            Some(convergence_trampoline),
+            cycling,
+            None
+        ))?;
         chk!(SNESSetType(snes.raw, c"newtonls".as_ptr()))?;
         let mut ls: p::SNESLineSearch = std::ptr::null_mut();
         chk!(SNESGetLineSearch(snes.raw, &mut ls))?;
@@ -205,7 +225,6 @@ impl Snes {
         if snes.factorizes()? {
             super::ksp::probe_factorization().map_err(|e| options_error(options_source, e))?;
         }
-        let mut snes = snes;
         snes.history = vec![0.0; max_it.max(1) as usize + 2];
         Ok(snes)
     }
@@ -303,6 +322,17 @@ impl Snes {
             None => solved?,
         }
         self.outcome(ctx.domain_error)
+    }
+
+    /// From the next solve on, stop a solve (`DIVERGED_DTOL`) that cycles: its residual norm
+    /// rises at an iteration `k >= 2` to above `progress` times the norm of iteration `k - 2`
+    /// (`None`: never; PETSc's test alone). Full Newton steps on a piecewise smooth residual
+    /// may cycle between two sets of states (open and closed, stick and slip), the norm going
+    /// up and down between the same two levels; a solve that then falls back to another line
+    /// search should not spend its iterations first. (Only while PETSc's default convergence
+    /// test is in place: `-snes_convergence_test` replaces it.)
+    pub fn stop_on_cycling(&mut self, progress: Option<f64>) {
+        self.cycling.progress = progress;
     }
 
     /// For a problem whose tangent never changes (linear materials, dead loads, tying): the
@@ -419,7 +449,14 @@ impl Snes {
         let mut ksp: p::KSP = std::ptr::null_mut();
         chk!(SNESGetKSP(self.raw, &mut ksp))?;
         chk!(KSPSetOperators(ksp, a.raw, a.raw))?;
-        chk!(KSPSolve(ksp, b.raw, x.raw))?;
+        // Eisenstat-Walker's tolerance (`-snes_ksp_ew`) is computed from the norms of a
+        // running Newton solve, which a solve outside it lacks: off for this one.
+        let mut ew = p::PetscBool::PETSC_FALSE;
+        chk!(SNESKSPGetUseEW(self.raw, &mut ew))?;
+        chk!(SNESKSPSetUseEW(self.raw, p::PetscBool::PETSC_FALSE))?;
+        let solved = chk!(KSPSolve(ksp, b.raw, x.raw));
+        chk!(SNESKSPSetUseEW(self.raw, ew))?;
+        solved?;
         let mut reason = p::KSPConvergedReason(0);
         chk!(KSPGetConvergedReason(ksp, &mut reason))?;
         Ok(reason.0 > 0)
@@ -560,6 +597,35 @@ unsafe extern "C" fn jacobian_trampoline(
             (c.jacobian)(&xv, &mut jm)
         },
     )
+}
+
+/// PETSc's default convergence test, then the cycling of [`Snes::stop_on_cycling`].
+unsafe extern "C" fn convergence_trampoline(
+    snes: p::SNES,
+    it: PetscInt,
+    xnorm: f64,
+    snorm: f64,
+    fnorm: f64,
+    reason: *mut p::SNESConvergedReason,
+    ctx: *mut c_void,
+) -> p::PetscErrorCode {
+    let code = p::SNESConvergedDefault(snes, it, xnorm, snorm, fnorm, reason, std::ptr::null_mut());
+    if code != 0 || ctx.is_null() || reason.is_null() {
+        return code;
+    }
+    let cycling = &mut *(ctx as *mut Cycling);
+    if it == 0 {
+        cycling.last = [f64::INFINITY; 2];
+    }
+    let [previous, before] = cycling.last;
+    let cycles = cycling
+        .progress
+        .is_some_and(|least| fnorm > previous && fnorm > least * before);
+    cycling.last = [fnorm, previous];
+    if cycles && *reason == p::SNESConvergedReason::SNES_CONVERGED_ITERATING {
+        *reason = p::SNESConvergedReason::SNES_DIVERGED_DTOL;
+    }
+    0
 }
 
 /// PETSc's name of a converged reason.

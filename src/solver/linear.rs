@@ -3,7 +3,7 @@
 //! A direct solve (LU through MUMPS) costs about `n^2` per factorization on these meshes and
 //! an iterative one (GMRES with multigrid and an exact solve on the interfaces' dofs) about
 //! `n` per iteration, with a bounded number of iterations: below [`DIRECT_BELOW`] free dofs the
-//! direct solve is the faster (docs/performance.md, "Linear solver and predictor"), from there
+//! direct solve is the faster (docs/performance.md, "Refinement"), from there
 //! on the iterative one. PETSc's `-ksp_type` or `-pc_type` options replace the choice.
 
 use crate::case::Scene;

@@ -10,7 +10,8 @@
 //! summary. When a run fails, every output describes the last converged step.
 //!
 //! With frictional contact, a solve gets `FULL_STEP_ITERATIONS` full Newton steps first; if
-//! they do not converge (a node's open, stick or slip state cycling), the solve is redone from
+//! they do not converge, or they cycle (`FULL_STEP_CYCLE_PROGRESS`: a node's open, stick or
+//! slip state flipping back and forth), the solve is redone from
 //! the same start with the `FALLBACK_LINE_SEARCH` before the step is cut. The step's Newton
 //! count includes the failed attempt; the redone solves are counted in the summary
 //! (`line_search_fallbacks`) and named in the progress line.
@@ -87,9 +88,18 @@ const STICK_PREDICTOR_ITERATIONS: usize = 6;
 /// same start with [`FALLBACK_LINE_SEARCH`] before the step is cut.
 const FULL_STEP_ITERATIONS: usize = 10;
 
-/// The line search of the second attempt: PETSc's `l2` (a secant minimization of ||F||^2 along
-/// the Newton direction); why this one: docs/performance.md, "Newton on frictional contact".
-const FALLBACK_LINE_SEARCH: &str = "l2";
+/// Frictional contact: a solve with full Newton steps also ends, and is redone with
+/// [`FALLBACK_LINE_SEARCH`], when its residual norm rises to above this fraction of its value
+/// two iterations before: the iterates cycle between two sets of node states (open and
+/// closed, stick and slip), where converging full steps, even those that rise once or twice on
+/// the way, gain more than this over two iterations (docs/performance.md, "Newton on
+/// frictional contact").
+const FULL_STEP_CYCLE_PROGRESS: f64 = 0.5;
+
+/// The line search of the second attempt: PETSc's `bt` (backtracking: the Newton step shortened
+/// until ||F||^2 decreases enough, by cubic interpolation); why this one: docs/performance.md,
+/// "Newton on frictional contact".
+const FALLBACK_LINE_SEARCH: &str = "bt";
 
 /// The phases of a run, each a PETSc log stage (`-log_view`) and a total in `summary.json`'s
 /// `timings`.
@@ -137,8 +147,15 @@ struct Run<'a> {
     summary: Summary,
     /// The line search of a second attempt (frictional scenes with full Newton steps).
     fallback_line_search: Option<&'static str>,
+    /// Print the contact state of every Newton iterate ([`CONTACT_MONITOR`]).
+    contact_monitor: bool,
     started: Instant,
 }
+
+/// The option that prints, after each Newton iteration's residual norm, how many nodes of
+/// each contact interface stick and slip and how many changed their state since the previous
+/// iterate (`contact::frictional`, "changes").
+pub const CONTACT_MONITOR: &str = "-contact_monitor";
 
 /// The PETSc objects of a run and the matrix pattern.
 struct Linear {

@@ -16,7 +16,7 @@ use crate::io::output::Summary;
 use crate::model::{Contribution, Model};
 use crate::petsc::log::Phases;
 use crate::petsc::snes::Tolerances;
-use crate::petsc::{Matrix, Petsc, Scatter, Snes, Vector};
+use crate::petsc::{options, Matrix, Petsc, Scatter, Snes, Vector};
 use crate::solid::Bulk;
 
 use super::assembly::Pattern;
@@ -25,7 +25,9 @@ use super::linear;
 use super::predictor::{NewtonTangent, Tangent};
 use super::results::Results;
 use super::state::RunState;
-use super::{Context, Linear, Run, RunOptions, FALLBACK_LINE_SEARCH, PHASES, TIMED_PARTS};
+use super::{
+    Context, Linear, Run, RunOptions, CONTACT_MONITOR, FALLBACK_LINE_SEARCH, PHASES, TIMED_PARTS,
+};
 
 impl<'a> Run<'a> {
     /// Everything a run of `scene` needs, made (*collective*).
@@ -80,6 +82,7 @@ impl<'a> Run<'a> {
             phases,
             state: RunState::new(scene),
             fallback_line_search,
+            contact_monitor: options::has(CONTACT_MONITOR)?,
             started,
         })
     }

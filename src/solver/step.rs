@@ -14,12 +14,12 @@ use crate::petsc::{CallbackError, SnesOutcome};
 
 use super::assembly;
 use super::cut::{cut_limit, describe};
-use super::evaluation::Evaluation;
+use super::evaluation::{Evaluation, Verdict};
 use super::predictor::{predict, NewtonTangent};
 use super::results::StepRow;
 use super::setup::new_matrix;
 use super::summary::{not_started, retries_note, Load};
-use super::{Run, FULL_STEP_ITERATIONS, STICK_PREDICTOR_ITERATIONS};
+use super::{Run, FULL_STEP_CYCLE_PROGRESS, FULL_STEP_ITERATIONS, STICK_PREDICTOR_ITERATIONS};
 
 /// What became of a step.
 pub(super) enum StepEnd {
@@ -202,8 +202,9 @@ impl Run<'_> {
     }
 
     /// One attempt at the step's solve: full Newton steps, and with frictional contact, when
-    /// they do not converge within [`FULL_STEP_ITERATIONS`], the same solve from the same start
-    /// with the fallback line search (the failed attempt's iterations go to `counted`).
+    /// they do not converge within [`FULL_STEP_ITERATIONS`] (or they cycle:
+    /// [`FULL_STEP_CYCLE_PROGRESS`]), the same solve from the same start with the
+    /// fallback line search (the failed attempt's iterations go to `counted`).
     fn attempt(&mut self, counted: &mut Counted) -> Result<SnesOutcome> {
         let Some(line_search) = self.fallback_line_search else {
             return self.solve_once();
@@ -214,7 +215,9 @@ impl Run<'_> {
         if max_it < FULL_STEP_ITERATIONS {
             l.snes.set_max_iterations(max_it)?;
         }
+        l.snes.stop_on_cycling(Some(FULL_STEP_CYCLE_PROGRESS));
         let first = self.solve_once();
+        self.linear.snes.stop_on_cycling(None);
         self.linear.snes.set_max_iterations(max_it)?;
         let first = first?;
         if first.converged || self.state.stop.get().is_some() {
@@ -243,6 +246,15 @@ impl Run<'_> {
         };
         let assembly_stage = self.phases.stage("assembly");
         let (world, stop) = (&self.cx.world, &self.state.stop);
+        let report = |verdict: Verdict| {
+            if self.contact_monitor && verdict.is_ok() {
+                let lines = self.model.iteration_report(world);
+                if self.cx.rank == 0 {
+                    lines.iter().for_each(|l| println!("{l}"));
+                }
+            }
+            verdict
+        };
         let mut residual = |x: &_, f: &mut _| -> Result<(), CallbackError> {
             let _stage = assembly_stage.map(|st| st.push()).transpose()?;
             ev.residual(x, f)?
@@ -256,7 +268,7 @@ impl Run<'_> {
                 return Err(CallbackError::Domain(format!("interrupted by {name}")));
             }
             let _stage = assembly_stage.map(|st| st.push()).transpose()?;
-            ev.jacobian(x, j)?
+            report(ev.jacobian(x, j)?)
         };
         let l = &mut self.linear;
         l.snes

@@ -181,15 +181,21 @@ impl ContactPass {
                 .as_ref()
                 .map(|pairs| self.pairs_by_node(pairs, &self.held));
             let by_node = differentiated.as_ref().unwrap_or(&measured);
+            let mut states = Vec::new();
             for (&a, terms) in by_node {
                 // A node without residual weights has no force to linearize.
                 let Some(kin) = kinematics.get(&a) else {
                     continue;
                 };
-                let (block, _) = self.node_block(ctx, &normals, a, kin, terms, evaluation.tangent);
+                let (block, fields) =
+                    self.node_block(ctx, &normals, a, kin, terms, evaluation.tangent);
+                states.push((a, fields.status));
                 if let Some(block) = block {
                     sink(&block)?;
                 }
+            }
+            if evaluation.tangent {
+                self.record_states(states);
             }
             Ok(())
         })?;

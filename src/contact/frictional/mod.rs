@@ -175,6 +175,7 @@
 //! The node-on-segment driver of a pass lives with its geometry in
 //! [`crate::contact::node_on_segment`].
 
+mod changes;
 mod coverage;
 mod deal;
 mod evaluate;
@@ -201,6 +202,7 @@ use crate::model::{
 };
 use crate::petsc::log::Section;
 
+pub use changes::StateChanges;
 pub use coverage::{coverage_fade, coverage_scale, COVERED_TOL, FADE_COVERAGE, MIN_COVERAGE};
 pub(crate) use evaluate::{EvalContext, Evaluation};
 pub(crate) use fields::status_code;
@@ -276,6 +278,9 @@ pub struct ContactInterfaces {
     saved: Option<Saved>,
     /// The force sums of every committed step ([`ContactInterfaces::force_sums`]).
     history: Vec<Vec<[f64; FORCE_SUMS]>>,
+    /// Per interface: the law state changes of the last committed step, over every rank
+    /// ([`changes`]).
+    step_changes: Vec<u64>,
 }
 
 /// The contact work of the residual and tangent evaluations, each a PETSc log stage and a
@@ -351,6 +356,7 @@ impl ContactInterfaces {
             timings: ContactTimings::default(),
             saved: None,
             history: Vec::new(),
+            step_changes: Vec::new(),
         };
         // The reference configuration is the first converged state: slip is measured from it.
         let zero = vec![0.0; 3 * scene.mesh.num_nodes()];
@@ -436,6 +442,7 @@ impl Contribution for ContactInterfaces {
 
     fn save(&mut self) {
         self.saved = Some(self.snapshot());
+        self.for_each_log(|log| log.start_step());
     }
 
     fn restore(&mut self) {
@@ -448,6 +455,11 @@ impl Contribution for ContactInterfaces {
     fn commit(&mut self, at: &State, world: &SimpleCommunicator) {
         let sums = self.force_sums(at, world);
         self.history.push(sums);
+        self.step_changes = self
+            .state_changes(world, |log| log.step)
+            .iter()
+            .map(|(changes, _)| changes.total())
+            .collect();
         self.close_step(at);
     }
 
@@ -459,18 +471,45 @@ impl Contribution for ContactInterfaces {
         self.stick_all.set(on);
     }
 
+    fn iteration_report(&self, world: &SimpleCommunicator) -> Vec<String> {
+        let changes = self.state_changes(world, |log| log.last);
+        self.interfaces
+            .iter()
+            .zip(changes)
+            .map(|(iface, (c, [stick, slip]))| {
+                format!(
+                    "    contact {}: {stick} stick, {slip} slip; changed {}: {} closed, {} opened, \
+                     {} stick->slip, {} slip->stick",
+                    iface.name,
+                    c.total(),
+                    c.closed,
+                    c.opened,
+                    c.slipped,
+                    c.stuck
+                )
+            })
+            .collect()
+    }
+
     fn history_columns(&self) -> Vec<String> {
         self.interfaces
             .iter()
-            .flat_map(|i| FORCE_SUM_NAMES.map(|c| format!("contact_{}_{c}", i.name)))
+            .flat_map(|i| {
+                let sums = FORCE_SUM_NAMES.map(|c| format!("contact_{}_{c}", i.name));
+                sums.into_iter()
+                    .chain([format!("contact_{}_state_changes", i.name)])
+            })
             .collect()
     }
 
     fn history(&self) -> Vec<f64> {
-        self.history
-            .last()
-            .map(|sums| sums.iter().flatten().copied().collect())
-            .unwrap_or_default()
+        let Some(sums) = self.history.last() else {
+            return Vec::new();
+        };
+        sums.iter()
+            .zip(&self.step_changes)
+            .flat_map(|(s, &changes)| s.iter().copied().chain([changes as f64]))
+            .collect()
     }
 
     fn output(&self, at: &State, world: &SimpleCommunicator) -> Vec<Output> {

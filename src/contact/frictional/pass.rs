@@ -13,6 +13,7 @@ use crate::error::Result;
 use crate::fe::FaceType;
 use crate::mesh::FaceRef;
 
+use super::changes::StateLog;
 use super::coverage::full_integrals;
 use super::deal::Work;
 use super::evaluate::ValuesAt;
@@ -69,6 +70,8 @@ pub struct ContactPass {
     pub(crate) surface_nodes: Vec<usize>,
     /// The last values-only integration (`ContactPass::values_at`).
     pub(crate) last_values: RefCell<Option<ValuesAt>>,
+    /// The held nodes' law states at the last tangent evaluation, and their changes.
+    pub(crate) state_log: RefCell<StateLog>,
 }
 
 /// A face's type and global nodes.
@@ -133,6 +136,7 @@ impl ContactPass {
             tallied: work.tallied,
             method: iface.method,
             last_values: RefCell::new(None),
+            state_log: RefCell::new(StateLog::default()),
         })
     }
 

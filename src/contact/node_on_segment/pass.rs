@@ -36,14 +36,19 @@ impl ContactPass {
         let timed = evaluation.timed;
         let tree = timed.search.time(|| self.primary_tree(ctx.x));
         let failed = timed.assembly.time(|| -> Result<bool> {
+            let mut states = Vec::with_capacity(self.held.len());
             for &a in &self.held {
-                let (block, _) = self.nts_node(ctx, &tree, a, evaluation.tangent);
+                let (block, fields) = self.nts_node(ctx, &tree, a, evaluation.tangent);
+                states.push((a, fields.status));
                 if let Some(block) = block {
                     if block.force.iter().any(|v| !v.is_finite()) {
                         return Ok(true);
                     }
                     sink(&block)?;
                 }
+            }
+            if evaluation.tangent {
+                self.record_states(states);
             }
             Ok(false)
         })?;
