@@ -132,43 +132,55 @@ impl DofMap {
         }
     }
 
-    /// The six rigid body modes of the mesh (three translations, three rotations about the
-    /// centroid of its nodes, in the reference configuration) on the owned free dofs: the near
-    /// null space of elasticity that algebraic multigrid needs. With constrained dofs eliminated
-    /// and several bodies they are only *near* null, which is what multigrid asks for: it
-    /// restricts them to each aggregate, so one set serves every body.
+    /// The rigid body modes of every body (three translations, three rotations about the
+    /// centroid of its nodes, in the reference configuration), each on the owned free dofs of
+    /// its body's nodes and zero elsewhere: the near null space of elasticity that algebraic
+    /// multigrid needs, six per body. With constrained dofs eliminated they are only *near*
+    /// null, which is what multigrid asks for. One set per body, not one for the mesh: where
+    /// contact couples two bodies in the matrix, an aggregate may hold nodes of both, and only
+    /// per-body modes let its coarse space move one body against the other (a slip).
     pub fn rigid_body_modes(&self, mesh: &Mesh) -> Vec<Vec<f64>> {
-        let n = mesh.num_nodes().max(1) as f64;
+        let body_of = node_bodies(mesh);
+        (0..mesh.bodies.len().max(1))
+            .flat_map(|b| self.body_rigid_modes(mesh, |v| body_of[v] == Some(b)))
+            .collect()
+    }
+
+    /// The six rigid body modes of the nodes `member` selects (see [`Self::rigid_body_modes`]).
+    fn body_rigid_modes(&self, mesh: &Mesh, member: impl Fn(usize) -> bool) -> Vec<Vec<f64>> {
+        let nodes: Vec<usize> = (0..mesh.num_nodes()).filter(|&v| member(v)).collect();
+        let n = nodes.len().max(1) as f64;
         let mut centre = [0.0; 3];
-        for x in &mesh.coords {
-            (0..3).for_each(|c| centre[c] += x[c] / n);
+        for &v in &nodes {
+            (0..3).for_each(|c| centre[c] += mesh.coords[v][c] / n);
         }
-        // Rotations in units of the mesh size, so that all six modes are of one magnitude.
-        let size = mesh
-            .coords
+        // Rotations in units of the body's size, so that all six modes are of one magnitude.
+        let size = nodes
             .iter()
-            .flat_map(|x| (0..3).map(move |c| (x[c] - centre[c]).abs()))
+            .flat_map(|&v| (0..3).map(move |c| (mesh.coords[v][c] - centre[c]).abs()))
             .fold(0.0, f64::max)
             .max(f64::MIN_POSITIVE);
         let mut modes = vec![vec![0.0; self.owned_count]; 6];
-        for (dof, &g) in self.global.iter().enumerate() {
-            let owned = self.owned_start..self.owned_start + self.owned_count;
-            if g < 0 || !owned.contains(&(g as usize)) {
-                continue;
-            }
-            let row = g as usize - self.owned_start;
-            let (v, c) = (dof / 3, dof % 3);
-            let r: [f64; 3] = std::array::from_fn(|k| (mesh.coords[v][k] - centre[k]) / size);
-            modes[c][row] = 1.0;
-            // Rotation about axis k: (e_k x r)_c.
-            for k in 0..3 {
-                let e = std::array::from_fn::<f64, 3, _>(|i| if i == k { 1.0 } else { 0.0 });
-                let cross = [
-                    e[1] * r[2] - e[2] * r[1],
-                    e[2] * r[0] - e[0] * r[2],
-                    e[0] * r[1] - e[1] * r[0],
-                ];
-                modes[3 + k][row] = cross[c];
+        let owned = self.owned_start..self.owned_start + self.owned_count;
+        for &v in &nodes {
+            for c in 0..3 {
+                let g = self.global[3 * v + c];
+                if g < 0 || !owned.contains(&(g as usize)) {
+                    continue;
+                }
+                let row = g as usize - self.owned_start;
+                let r: [f64; 3] = std::array::from_fn(|k| (mesh.coords[v][k] - centre[k]) / size);
+                modes[c][row] = 1.0;
+                // Rotation about axis k: (e_k x r)_c.
+                for k in 0..3 {
+                    let e = std::array::from_fn::<f64, 3, _>(|i| if i == k { 1.0 } else { 0.0 });
+                    let cross = [
+                        e[1] * r[2] - e[2] * r[1],
+                        e[2] * r[0] - e[0] * r[2],
+                        e[0] * r[1] - e[1] * r[0],
+                    ];
+                    modes[3 + k][row] = cross[c];
+                }
             }
         }
         modes
@@ -211,6 +223,17 @@ pub fn node_to_elements(mesh: &Mesh) -> Vec<Vec<usize>> {
         }
     }
     adj
+}
+
+/// The body of every node (of its elements'); `None` for a node of no element.
+fn node_bodies(mesh: &Mesh) -> Vec<Option<usize>> {
+    let mut body = vec![None; mesh.num_nodes()];
+    for e in 0..mesh.num_elements() {
+        for &v in mesh.element_nodes(e) {
+            body[v] = Some(mesh.body[e]);
+        }
+    }
+    body
 }
 
 #[cfg(test)]
@@ -292,6 +315,56 @@ mod tests {
                 }
             }
             assert_eq!(seen, d.owned_count);
+        }
+    }
+
+    /// Two bodies: six modes each, each zero on the other body's dofs and, on its own, the
+    /// rigid motions about its own centroid.
+    #[test]
+    fn every_body_has_its_own_rigid_body_modes() {
+        let mut m = two_hexes();
+        // The second element becomes a body of its own, on nodes of its own.
+        let first = m.num_nodes();
+        for v in 4..12 {
+            m.coords.push(m.coords[v]);
+        }
+        let second: Vec<usize> = m.element_nodes(1).iter().map(|&v| v - 4 + first).collect();
+        let start = m.offsets[1];
+        m.conn[start..start + 8].copy_from_slice(&second);
+        m.body[1] = 1;
+        m.bodies.push("c".into());
+        let constrained = vec![false; 3 * m.num_nodes()];
+        let d = DofMap::new(&m, vec![0, 0], 0, 1, &constrained);
+        let modes = d.rigid_body_modes(&m);
+        assert_eq!(modes.len(), 12);
+        // Centroids (0.5, 0.5, 0.5) and (1.5, 0.5, 0.5), half-size 0.5 along every axis.
+        let centres = [[0.5, 0.5, 0.5], [1.5, 0.5, 0.5]];
+        for v in 0..m.num_nodes() {
+            let body = usize::from(v >= first);
+            let r: [f64; 3] = std::array::from_fn(|k| (m.coords[v][k] - centres[body][k]) / 0.5);
+            // (e_k x r)_c
+            let rotation_of = |k: usize, c: usize| match (k, c) {
+                (0, 1) => -r[2],
+                (0, 2) => r[1],
+                (1, 0) => r[2],
+                (1, 2) => -r[0],
+                (2, 0) => -r[1],
+                (2, 1) => r[0],
+                _ => 0.0,
+            };
+            let used = v < 8 || v >= first;
+            for c in 0..3 {
+                let row = d.global[3 * v + c] as usize;
+                for b in 0..2 {
+                    let own = b == body && used;
+                    for k in 0..3 {
+                        let translation = if own && k == c { 1.0 } else { 0.0 };
+                        assert_eq!(modes[6 * b + k][row], translation, "node {v} body {b}");
+                        let rotation = if own { rotation_of(k, c) } else { 0.0 };
+                        assert!((modes[6 * b + 3 + k][row] - rotation).abs() < 1e-15);
+                    }
+                }
+            }
         }
     }
 

@@ -58,6 +58,37 @@ fn auto_solves_directly_below_the_crossover_and_iteratively_from_it() {
     assert!(d < 1e-8, "iterative against direct: {d:e}");
 }
 
+/// A composite preconditioner whose first part is a field split (the split, then multigrid on
+/// the whole matrix) gets the interface's fields, and solves the frictional slide to the
+/// direct solve's state, on 1 and 2 ranks.
+#[test]
+fn a_composite_preconditioner_gets_the_interface_fields() {
+    let case = case("composite_split", &common::slide_case(4));
+    let (direct, _) = common::run_case(&case, 1, &["-q"]);
+    let composite = [
+        "-q",
+        "-ksp_type",
+        "gmres",
+        "-ksp_rtol",
+        "1e-10",
+        "-pc_type",
+        "composite",
+        "-pc_composite_type",
+        "multiplicative",
+        "-pc_composite_pcs",
+        "fieldsplit,gamg",
+        "-sub_0_fieldsplit_interface_pc_type",
+        "lu",
+        "-sub_0_fieldsplit_bulk_pc_type",
+        "jacobi",
+    ];
+    for ranks in [1, 2] {
+        let (out, _) = common::run_case(&case, ranks, &composite);
+        let d = common::max_rel_difference_of_runs(&direct, &out);
+        assert!(d < 1e-8, "{ranks} rank(s): {d:e} from the direct solve");
+    }
+}
+
 /// Linear iterations per Newton iteration of every step of a run (steps without a Newton
 /// iteration left out).
 fn linear_per_newton(out: &std::path::Path) -> Vec<f64> {

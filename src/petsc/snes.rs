@@ -378,9 +378,9 @@ impl Snes {
         modes: &[Vec<f64>],
     ) -> Result<bool> {
         let (pc, pc_type) = self.preconditioner()?;
-        if pc_type != "fieldsplit" {
+        let Some(pc) = fieldsplit_within(pc, &pc_type)? else {
             return Ok(false);
-        }
+        };
         let mut in_interface = vec![false; count];
         for &g in interface {
             in_interface[g as usize - start] = true;
@@ -597,6 +597,30 @@ unsafe extern "C" fn jacobian_trampoline(
             (c.jacobian)(&xv, &mut jm)
         },
     )
+}
+
+/// The field split `pc` is (of type `pc_type`), or the first one among its parts when it is a
+/// composite; `None` without one.
+fn fieldsplit_within(pc: p::PC, pc_type: &str) -> Result<Option<p::PC>> {
+    match pc_type {
+        "fieldsplit" => Ok(Some(pc)),
+        "composite" => {
+            let mut n: PetscInt = 0;
+            chk!(PCCompositeGetNumberPC(pc, &mut n))?;
+            for k in 0..n {
+                let mut sub: p::PC = std::ptr::null_mut();
+                chk!(PCCompositeGetPC(pc, k, &mut sub))?;
+                let mut sub_type: p::PCType = std::ptr::null();
+                chk!(PCGetType(sub, &mut sub_type))?;
+                // SAFETY: PETSc returns its static type name, or null.
+                if unsafe { type_name(sub_type) } == "fieldsplit" {
+                    return Ok(Some(sub));
+                }
+            }
+            Ok(None)
+        }
+        _ => Ok(None),
+    }
 }
 
 /// PETSc's default convergence test, then the cycling of [`Snes::stop_on_cycling`].

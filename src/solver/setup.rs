@@ -163,7 +163,8 @@ impl Linear {
     }
 }
 
-/// A matrix of the pattern's sparsity, with the rigid body modes as its near null space.
+/// A matrix of the pattern's sparsity, with the rigid body modes of every body as its near null
+/// space.
 pub(super) fn new_matrix(
     pattern: &Pattern,
     dofs: &DofMap,
