@@ -44,7 +44,7 @@ pub struct Run {
     pub converged: bool,
     pub newton: f64,
     pub linear: f64,
-    /// Seconds per phase, in the order of [`PHASES`].
+    /// Seconds per phase, in the order of the table's phases (`PHASES`).
     pub seconds: Vec<f64>,
     /// The peak resident memory of the largest rank, MB (`None`: not recorded).
     pub peak_mb: Option<f64>,
