@@ -225,6 +225,20 @@ pub fn node_to_elements(mesh: &Mesh) -> Vec<Vec<usize>> {
     adj
 }
 
+/// The per-body modes of [`DofMap::rigid_body_modes`] summed, body over body, into one set of
+/// six. On any aggregate within one body they span what that body's own modes span, which is all
+/// that multigrid needs where the matrix couples no two bodies (the bulk field of the iterative
+/// path, whose interface dofs are split off), with six vectors instead of six per body.
+pub fn one_set_of_six(modes: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    let mut six = modes.iter().take(6).cloned().collect::<Vec<_>>();
+    for body in modes.chunks(6).skip(1) {
+        for (sum, mode) in six.iter_mut().zip(body) {
+            sum.iter_mut().zip(mode).for_each(|(s, m)| *s += m);
+        }
+    }
+    six
+}
+
 /// The body of every node (of its elements'); `None` for a node of no element.
 fn node_bodies(mesh: &Mesh) -> Vec<Option<usize>> {
     let mut body = vec![None; mesh.num_nodes()];
@@ -337,6 +351,13 @@ mod tests {
         let d = DofMap::new(&m, vec![0, 0], 0, 1, &constrained);
         let modes = d.rigid_body_modes(&m);
         assert_eq!(modes.len(), 12);
+        let six = one_set_of_six(&modes);
+        assert_eq!(six.len(), 6);
+        for (k, mode) in six.iter().enumerate() {
+            for (row, &v) in mode.iter().enumerate() {
+                assert_eq!(v, modes[k][row] + modes[6 + k][row]);
+            }
+        }
         // Centroids (0.5, 0.5, 0.5) and (1.5, 0.5, 0.5), half-size 0.5 along every axis.
         let centres = [[0.5, 0.5, 0.5], [1.5, 0.5, 0.5]];
         for v in 0..m.num_nodes() {

@@ -366,11 +366,12 @@ impl Snes {
         chk!(SNESLineSearchSetType(ls, c.as_ptr()))
     }
 
-    /// Names the two fields of a field-split preconditioner (`-pc_type fieldsplit`; returns
-    /// false and does nothing for another): `interface`, the owned global dofs `interface`
-    /// (sorted), and `bulk`, the other owned dofs `[start, start + count)`, with `modes` (the
-    /// near null space of the whole matrix, owned rows) restricted to them as the bulk's near
-    /// null space, for multigrid. Before the first solve. Collective.
+    /// Names the two fields of a field-split preconditioner (`-pc_type fieldsplit`, or the
+    /// first field split of a composite; returns false and does nothing for another):
+    /// `interface`, the owned global dofs `interface` (sorted), and `bulk`, the other owned
+    /// dofs `[start, start + count)`, with `modes` (a near null space on the owned rows)
+    /// restricted to them as the bulk's near null space, for multigrid. Before the first solve.
+    /// Collective.
     pub fn split_interface(
         &mut self,
         interface: &[PetscInt],

@@ -141,7 +141,9 @@ impl Linear {
             choice.path,
         )?;
         let owned = (dofs.owned_start, dofs.owned_count);
-        snes.split_interface(&linear::interface_dofs(model, dofs), owned, &rigid_modes)?;
+        // The bulk field couples no two bodies: one set of six modes serves it.
+        let bulk_modes = crate::dofs::one_set_of_six(&rigid_modes);
+        snes.split_interface(&linear::interface_dofs(model, dofs), owned, &bulk_modes)?;
         if scene.is_linear() {
             snes.freeze_jacobian()?;
         }
