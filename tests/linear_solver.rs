@@ -127,9 +127,7 @@ fn the_iterative_path_solves_the_smallest_level_as_the_direct_one() {
     let (iter1, _) = common::run_case(&iterative, 1, &["-q"]);
     let (iter2, _) = common::run_case(&iterative, 2, &["-q"]);
     for out in [&direct_out, &iter1, &iter2] {
-        let history = common::History::read(out);
-        let k = history.column("cuts");
-        let cuts: f64 = history.rows().iter().map(|r| r[k]).sum();
+        let cuts = common::History::read(out).sum("cuts");
         assert_eq!(cuts, 0.0, "{}: {cuts} step cut(s)", out.display());
     }
     for (out, ranks) in [(&iter1, 1), (&iter2, 2)] {

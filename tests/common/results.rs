@@ -113,6 +113,12 @@ impl History {
             .map(|l| l.split(',').map(|s| s.parse().unwrap()).collect())
             .collect()
     }
+
+    /// The sum of column `name` over the steps.
+    pub fn sum(&self, name: &str) -> f64 {
+        let k = self.column(name);
+        self.rows().iter().map(|r| r[k]).sum()
+    }
 }
 
 /// The one `mortar: error:` line of a failed run's stderr (mpirun adds its own banners around

@@ -189,7 +189,9 @@ impl ContactPass {
                 };
                 let (block, fields) =
                     self.node_block(ctx, &normals, a, kin, terms, evaluation.tangent);
-                states.push((a, fields.status));
+                if evaluation.tangent {
+                    states.push((a, fields.status));
+                }
                 if let Some(block) = block {
                     sink(&block)?;
                 }

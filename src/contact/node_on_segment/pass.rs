@@ -36,10 +36,12 @@ impl ContactPass {
         let timed = evaluation.timed;
         let tree = timed.search.time(|| self.primary_tree(ctx.x));
         let failed = timed.assembly.time(|| -> Result<bool> {
-            let mut states = Vec::with_capacity(self.held.len());
+            let mut states = Vec::new();
             for &a in &self.held {
                 let (block, fields) = self.nts_node(ctx, &tree, a, evaluation.tangent);
-                states.push((a, fields.status));
+                if evaluation.tangent {
+                    states.push((a, fields.status));
+                }
                 if let Some(block) = block {
                     if block.force.iter().any(|v| !v.is_finite()) {
                         return Ok(true);
