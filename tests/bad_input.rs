@@ -619,6 +619,16 @@ fn step_newton_and_verification_rows() -> Vec<Row> {
             valid_plus("[newton]\nrtol = 0.0\n"),
             "rtol",
         ),
+        check(
+            "newton_linear_solver_unknown",
+            valid_plus("[newton]\nlinear_solver = \"fast\"\n"),
+            "newton.linear_solver",
+        ),
+        check(
+            "newton_direct_below_negative",
+            valid_plus("[newton]\ndirect_below = -5\n"),
+            "newton.direct_below",
+        ),
         run(
             "newton_max_it_absurd",
             valid_plus("[newton]\nmax_it = 100000000000000\n"),
