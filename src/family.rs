@@ -4,7 +4,9 @@
 //! `history.csv`): the levels of a refinement family (`cases/refinement`), on one or more rank
 //! counts. The table gives, per run, the free dofs, the Newton iterations, the linear
 //! iterations per Newton iteration, the seconds of each phase of `summary.json`'s timings, the
-//! seconds per Newton iteration and the peak memory of the largest rank. Then:
+//! seconds per Newton iteration, the peak memory of the largest rank and the balance of the
+//! contact work (the busiest rank's seconds in search, integration and contact assembly over
+//! the ranks' mean). Then:
 //!
 //! - **fits**: between successive sizes on the same number of ranks, the exponent `p` of
 //!   `cost ~ n^p` (`n` the free dofs): `p = ln(c2 / c1) / ln(n2 / n1)` for the seconds per Newton
@@ -48,6 +50,9 @@ pub struct Run {
     pub seconds: Vec<f64>,
     /// The peak resident memory of the largest rank, MB (`None`: not recorded).
     pub peak_mb: Option<f64>,
+    /// The contact seconds of the busiest rank over the ranks' mean ([`contact_balance`];
+    /// `None` on one rank or without contact work).
+    pub contact_balance: Option<f64>,
 }
 
 impl Run {
@@ -73,6 +78,7 @@ impl Run {
             linear: linear_iterations(&dir.join("history.csv"))?,
             seconds: PHASES.iter().map(|(_, names)| timing(names)).collect(),
             peak_mb: summary.peak_memory_mb.iter().copied().reduce(f64::max),
+            contact_balance: contact_balance(&summary.contact_seconds_per_rank),
         })
     }
 
@@ -90,6 +96,14 @@ impl Run {
     pub fn linear_per_newton(&self) -> f64 {
         self.linear / self.newton.max(1.0)
     }
+}
+
+/// The largest of the ranks' contact seconds over their mean: 1 when the contact work is dealt
+/// out evenly; `None` for fewer than two ranks or no contact work.
+fn contact_balance(per_rank: &[f64]) -> Option<f64> {
+    let mean = per_rank.iter().sum::<f64>() / per_rank.len() as f64;
+    let max = per_rank.iter().copied().fold(0.0, f64::max);
+    (per_rank.len() > 1 && mean > 0.0).then(|| max / mean)
 }
 
 /// The sum of the `linear_its` column of a `history.csv`.
@@ -147,7 +161,11 @@ impl Family {
         for (title, _) in PHASES {
             let _ = write!(out, " {title:>12}");
         }
-        let _ = writeln!(out, " {:>9} {:>9} {:>8}", "total s", "s/newton", "peak MB");
+        let _ = writeln!(
+            out,
+            " {:>9} {:>9} {:>8} {:>8}",
+            "total s", "s/newton", "peak MB", "contact"
+        );
         for r in &self.runs {
             let _ = write!(
                 out,
@@ -163,7 +181,13 @@ impl Family {
                 let _ = write!(out, " {s:>12.2}");
             }
             let peak = r.peak_mb.map_or("-".to_string(), |m| format!("{m:.0}"));
-            let _ = writeln!(out, " {:>9.2} {:>9.4} {peak:>8}", r.total(), r.per_newton());
+            let balance = r.contact_balance.map_or("-".into(), |b| format!("{b:.3}"));
+            let _ = writeln!(
+                out,
+                " {:>9.2} {:>9.4} {peak:>8} {balance:>8}",
+                r.total(),
+                r.per_newton()
+            );
         }
         out
     }
@@ -241,7 +265,7 @@ impl Family {
         for (title, _) in PHASES {
             let _ = write!(out, ",seconds_{}", title.replace(' ', "_"));
         }
-        out.push_str(",seconds_total,seconds_per_newton,peak_memory_mb\n");
+        out.push_str(",seconds_total,seconds_per_newton,peak_memory_mb,contact_balance\n");
         for r in &self.runs {
             let _ = write!(
                 out,
@@ -252,7 +276,8 @@ impl Family {
                 let _ = write!(out, ",{s}");
             }
             let peak = r.peak_mb.map_or(String::new(), |m| m.to_string());
-            let _ = writeln!(out, ",{},{},{peak}", r.total(), r.per_newton());
+            let balance = r.contact_balance.map_or(String::new(), |b| b.to_string());
+            let _ = writeln!(out, ",{},{},{peak},{balance}", r.total(), r.per_newton());
         }
         out
     }
@@ -295,6 +320,7 @@ mod tests {
             linear: 10.0 * newton,
             seconds: vec![seconds / 7.0; 7],
             peak_mb: Some(dofs / 100.0),
+            contact_balance: (ranks > 1).then_some(1.05),
         }
     }
 
@@ -322,6 +348,21 @@ mod tests {
         );
         assert_eq!(speedups.lines().count(), 1, "{speedups}");
         assert_eq!(family.csv().lines().count(), 4);
+    }
+
+    /// The busiest rank over the mean; nothing to balance on one rank or without contact.
+    #[test]
+    fn contact_balance_is_the_busiest_rank_over_the_mean() {
+        assert_eq!(contact_balance(&[3.0, 1.0]), Some(1.5));
+        assert_eq!(contact_balance(&[2.0, 2.0, 2.0]), Some(1.0));
+        assert_eq!(contact_balance(&[4.0]), None);
+        assert_eq!(contact_balance(&[0.0, 0.0]), None);
+        assert_eq!(contact_balance(&[]), None);
+        let family = Family {
+            runs: vec![run("a2", 2, 1e4, 100.0, 5.5)],
+        };
+        assert!(family.table().lines().nth(1).unwrap().ends_with(" 1.050"));
+        assert!(family.csv().lines().nth(1).unwrap().ends_with(",1.05"));
     }
 
     #[test]

@@ -62,6 +62,15 @@ fn a_step_that_cannot_be_cut_fails_clearly() {
         .flat_map(|r| r[3..].iter().map(|v| v.abs()))
         .fold(0.0, f64::max);
     assert_eq!(u_max, 0.0);
+    // No step finished: no metric of the model's state (the undeformed one would pass for a
+    // result), only the run's counts.
+    let metrics = s["metrics"].as_object().unwrap();
+    let names: Vec<&String> = metrics.keys().collect();
+    assert_eq!(
+        names,
+        ["free_dofs", "max_newton_its", "total_newton_its"],
+        "{metrics:?}"
+    );
 }
 
 /// `steps.on_failure = "continue"`: a step Newton does not converge (here: one iteration

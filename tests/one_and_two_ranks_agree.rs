@@ -60,5 +60,15 @@ fn contact_one_and_two_ranks_agree() {
             let (a, b) = (common::metric(&one, &key), common::metric(&two, &key));
             assert!(a > 0.0 && a == b, "{name}: {key} {a} on 1 rank, {b} on 2");
         }
+        // Each rank's contact seconds, for the balance `mortar family` reports.
+        for (dir, ranks) in [(&one, 1), (&two, 2)] {
+            let seconds = common::summary(dir)["contact_seconds_per_rank"].clone();
+            let seconds = seconds.as_array().unwrap().clone();
+            assert_eq!(seconds.len(), ranks, "{name}: {seconds:?}");
+            assert!(
+                seconds.iter().all(|s| s.as_f64().unwrap() > 0.0),
+                "{name} on {ranks} rank(s): {seconds:?}"
+            );
+        }
     }
 }

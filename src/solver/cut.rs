@@ -1,6 +1,7 @@
-//! Step cutting: a load step whose solve fails is restored and halved, at most
-//! `steps.max_cuts` times in a row and never below `1 / (steps.count 2^max_cuts)`; after a
-//! converged cut step the step size doubles back toward the nominal one.
+//! Step cutting: a load step whose solve fails is restored and halved (the size it took, which
+//! the end of the load may clamp), at most `steps.max_cuts` times in a row and never below
+//! `1 / (steps.count 2^max_cuts)`; after a converged cut step the step size doubles back toward
+//! the nominal one.
 
 /// What stops a failed step from being cut again.
 #[derive(Debug, PartialEq)]

@@ -85,9 +85,64 @@ impl RunState {
         self.dt = (2.0 * self.dt).min(self.dt_nominal);
     }
 
-    /// A failed step is cut: the same step again at half the size.
+    /// The size of the step under way: [`Self::dt`], or less where the end of the load
+    /// clamps it.
+    pub fn taken(&self) -> f64 {
+        self.next_load() - self.t
+    }
+
+    /// A failed step is cut: the same step again at half the size it took (not half the
+    /// nominal size, which for a last step clamped at the end of the load may retry the very
+    /// same load).
     pub fn cut(&mut self) {
+        self.dt = 0.5 * self.taken();
         self.cuts_in_row += 1;
         self.counts.cuts += 1;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn state(steps: usize) -> RunState {
+        let dt_nominal = 1.0 / steps as f64;
+        RunState {
+            t: 0.0,
+            dt: dt_nominal,
+            dt_nominal,
+            dt_min: dt_nominal / 4.0,
+            cuts_in_row: 0,
+            step: 0,
+            counts: Counts::default(),
+            stop: std::cell::Cell::new(None),
+        }
+    }
+
+    /// Three steps, the first cut once: the steps end at 1/6, 1/2, 5/6 and the fourth is
+    /// clamped to the last sixth; cut, it retries at 11/12, not at the same load 1.
+    #[test]
+    fn a_cut_halves_the_step_taken() {
+        let mut s = state(3);
+        s.cut();
+        assert!((s.next_load() - 1.0 / 6.0).abs() < 1e-15);
+        for end in [1.0 / 6.0, 0.5, 5.0 / 6.0] {
+            assert!(
+                (s.next_load() - end).abs() < 1e-12,
+                "{} {end}",
+                s.next_load()
+            );
+            s.advance(s.next_load());
+            s.close_step();
+        }
+        assert_eq!(s.next_load(), 1.0);
+        assert!((s.taken() - 1.0 / 6.0).abs() < 1e-12);
+        s.cut();
+        assert!(
+            (s.next_load() - 11.0 / 12.0).abs() < 1e-12,
+            "{}",
+            s.next_load()
+        );
+        assert_eq!(s.counts.cuts, 2);
     }
 }

@@ -348,12 +348,16 @@ impl Run<'_> {
     /// domain (*collective*).
     fn accepts_unconverged(&self, outcome: &SnesOutcome) -> Result<bool> {
         let (state, scene) = (&self.state, self.cx.scene);
-        Ok(
-            cut_limit(state.cuts_in_row, scene.max_cuts, state.dt, state.dt_min).is_some()
-                && scene.continue_on_failure
-                && outcome.domain_error.is_none()
-                && self.linear.x.norm2()?.is_finite(),
+        Ok(cut_limit(
+            state.cuts_in_row,
+            scene.max_cuts,
+            state.taken(),
+            state.dt_min,
         )
+        .is_some()
+            && scene.continue_on_failure
+            && outcome.domain_error.is_none()
+            && self.linear.x.norm2()?.is_finite())
     }
 
     /// A step whose solve did not converge: back to the step's start, and the same step again
@@ -364,8 +368,9 @@ impl Run<'_> {
             .clone()
             .unwrap_or_else(|| outcome.reason.to_string());
         let (state, max_cuts) = (&self.state, self.cx.scene.max_cuts);
-        let limit = cut_limit(state.cuts_in_row, max_cuts, state.dt, state.dt_min)
-            .map(|limit| describe(&limit, state.dt, max_cuts));
+        let taken = state.taken();
+        let limit = cut_limit(state.cuts_in_row, max_cuts, taken, state.dt_min)
+            .map(|limit| describe(&limit, taken, max_cuts));
         self.linear.tangent.newton = NewtonTangent::Other;
         self.state.cut();
         self.restore()?;
@@ -388,7 +393,6 @@ impl Run<'_> {
             ));
             return Ok(StepEnd::GaveUp);
         }
-        self.state.dt *= 0.5;
         Ok(StepEnd::Cut)
     }
 

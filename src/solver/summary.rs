@@ -152,8 +152,12 @@ impl super::Run<'_> {
         let at = ev.state(self.cx.scene);
         self.results
             .write_displacements(self.cx.scene, &self.cx.dofs, at.u, &self.cx.world);
-        for (k, v) in self.model.metrics(&at, &self.cx.world) {
-            self.summary.metrics.insert(k, v);
+        // The model's metrics describe a finished step: none before the first (the undeformed
+        // state would pass for a result).
+        if self.state.step > 0 {
+            for (k, v) in self.model.metrics(&at, &self.cx.world) {
+                self.summary.metrics.insert(k, v);
+            }
         }
         drop(ev);
         let flags = (
@@ -169,6 +173,8 @@ impl super::Run<'_> {
         );
         self.summary.timings = self.phases.timings();
         self.summary.peak_memory_mb = peak_memory_of_ranks(&self.cx.world);
+        self.summary.contact_seconds_per_rank =
+            contact_seconds_of_ranks(&self.summary.timings, &self.cx.world);
         if self.cx.rank == 0 {
             self.results.write_summary(&self.summary);
         }
@@ -213,6 +219,22 @@ fn peak_memory_of_ranks(world: &mpi::topology::SimpleCommunicator) -> Vec<f64> {
     } else {
         all
     }
+}
+
+/// The timings of the contact work: search, mortar integration and contact assembly.
+const CONTACT_PHASES: [&str; 3] = ["contact_search", "contact_integration", "contact_assembly"];
+
+/// Every rank's seconds in the [`CONTACT_PHASES`] of its `timings` (*collective*).
+fn contact_seconds_of_ranks(
+    timings: &std::collections::BTreeMap<String, f64>,
+    world: &mpi::topology::SimpleCommunicator,
+) -> Vec<f64> {
+    use mpi::collective::CommunicatorCollectives;
+    use mpi::topology::Communicator;
+    let mine: f64 = CONTACT_PHASES.iter().filter_map(|p| timings.get(*p)).sum();
+    let mut all = vec![0.0; world.size() as usize];
+    world.all_gather_into(&mine, &mut all[..]);
+    all
 }
 
 #[cfg(test)]

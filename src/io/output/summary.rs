@@ -44,6 +44,10 @@ pub struct Summary {
     /// run; empty where the system does not say.
     #[serde(default)]
     pub peak_memory_mb: Vec<f64>,
+    /// Each rank's wall-clock seconds in the contact phases (search, mortar integration and
+    /// contact assembly): how evenly the contact work is dealt out.
+    #[serde(default)]
+    pub contact_seconds_per_rank: Vec<f64>,
 }
 
 impl Summary {
@@ -116,6 +120,7 @@ mod tests {
             metrics: [("max_penetration".to_string(), -1.5e-9)].into(),
             message: Some("Newton diverged in step 2".into()),
             peak_memory_mb: vec![512.5, 498.0],
+            contact_seconds_per_rank: vec![3.5, 3.25],
         }
     }
 
