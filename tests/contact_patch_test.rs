@@ -210,3 +210,26 @@ fn interface_status_marks_nodes_without_a_traction_unknown() {
         "{status:?}"
     );
 }
+
+/// A penalty of 1e10 (accepted: the bound is 1e12) puts the residual's round-off floor, about
+/// `eps |K_ii|_max |x|_max`, far above `atol`: Newton stalls there, and without the floor in the
+/// convergence test every step ran to `max_it` and was cut until the run failed. With it the
+/// steps converge at the default tolerances, say so, and the patch test holds to the accuracy
+/// that penalty leaves (measured: 3.7e-4 in the pressures and the stresses).
+#[test]
+fn a_stiff_penalty_converges_at_its_round_off_floor() {
+    let text = patch_case("hex8", [3, 3], [2, 2], "low", 2)
+        .replace("[[interface]]\n", "[[interface]]\npenalty = 1e10\n");
+    let case = common::write_case("contact_patch_stiff_penalty", &text);
+    let (out, stdout) = common::run_case(&case, 1, &[]);
+    assert!(
+        stdout.contains("below its round-off floor"),
+        "no step converged at its floor:\n{stdout}"
+    );
+    assert_eq!(common::summary(&out)["converged"], true);
+    for name in ["max_rel_pressure_error", "max_rel_stress_error"] {
+        let error = common::metric(&out, name);
+        eprintln!("{name} = {error:e}");
+        assert!(error < 1e-2, "{name} = {error:e}");
+    }
+}

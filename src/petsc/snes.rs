@@ -138,14 +138,27 @@ pub struct Snes {
     cycling: Box<Cycling>,
 }
 
-/// The last residual norms of a solve, for [`Snes::stop_on_cycling`].
+/// The convergence test's own state: the last residual norms of a solve, for
+/// [`Snes::stop_on_cycling`], and the scale of its round-off floor
+/// ([`Snes::set_round_off_length`]).
 #[derive(Default)]
 struct Cycling {
     /// The least progress over two iterations (`None`: never stop).
     progress: Option<f64>,
     /// The norms of the last two iterations, the latest first.
     last: [f64; 2],
+    /// The size of the positions whose round-off the residual carries (0: no floor).
+    length: f64,
+    /// The floor of the last test, and whether it ended the last solve.
+    floor: f64,
+    at_floor: bool,
 }
+
+/// The round-off floor of a residual norm, in units of `eps |K_ii|_max (L + |u|_max)`: a
+/// residual assembled from forces `K x` of positions of size `L + |u|` cannot be resolved below
+/// `eps |K| |x|` per row, and a few rows at the largest diagonal (the stiffest penalty) carry
+/// it (docs/theory.md, section 10, "Round-off floor").
+pub const ROUND_OFF_FACTOR: f64 = 4.0;
 
 impl Snes {
     /// A Newton solver with the project's defaults and the line search `line_search` (`basic`:
@@ -333,6 +346,21 @@ impl Snes {
     /// test is in place: `-snes_convergence_test` replaces it.)
     pub fn stop_on_cycling(&mut self, progress: Option<f64>) {
         self.cycling.progress = progress;
+    }
+
+    /// The size `L` of the positions (the mesh's largest coordinate): from the next solve on, a
+    /// residual norm below the round-off floor `ROUND_OFF_FACTOR eps |K_ii|_max (L + |u|_max)`
+    /// ([`ROUND_OFF_FACTOR`]; the tangent's largest diagonal entry, the largest displacement)
+    /// counts as converged (`CONVERGED_FNORM_ABS`), whatever `atol`: Newton cannot go below
+    /// it, and without it a stiff penalty would stall above `atol` until `max_it`.
+    pub fn set_round_off_length(&mut self, length: f64) {
+        self.cycling.length = length;
+    }
+
+    /// The round-off floor of the last convergence test, and whether the last solve converged
+    /// by reaching it rather than `atol` or `rtol`.
+    pub fn round_off_floor(&self) -> (f64, bool) {
+        (self.cycling.floor, self.cycling.at_floor)
     }
 
     /// For a problem whose tangent never changes (linear materials, dead loads, tying): the
@@ -641,6 +669,18 @@ unsafe extern "C" fn convergence_trampoline(
     let cycling = &mut *(ctx as *mut Cycling);
     if it == 0 {
         cycling.last = [f64::INFINITY; 2];
+        cycling.at_floor = false;
+    }
+    if cycling.length > 0.0 && *reason == p::SNESConvergedReason::SNES_CONVERGED_ITERATING {
+        let code = round_off_floor(snes, cycling.length, &mut cycling.floor);
+        if code != 0 {
+            return code;
+        }
+        if fnorm <= cycling.floor {
+            *reason = p::SNESConvergedReason::SNES_CONVERGED_FNORM_ABS;
+            cycling.at_floor = true;
+            return 0;
+        }
     }
     let [previous, before] = cycling.last;
     let cycles = cycling
@@ -650,6 +690,55 @@ unsafe extern "C" fn convergence_trampoline(
     if cycles && *reason == p::SNESConvergedReason::SNES_CONVERGED_ITERATING {
         *reason = p::SNESConvergedReason::SNES_DIVERGED_DTOL;
     }
+    0
+}
+
+/// `ROUND_OFF_FACTOR eps |K_ii|_max (length + |u|_max)` into `floor` for the solver's current
+/// tangent and solution (0 before the tangent's first assembly). Collective.
+unsafe fn round_off_floor(snes: p::SNES, length: f64, floor: &mut f64) -> p::PetscErrorCode {
+    let (mut a, mut pmat) = (std::ptr::null_mut(), std::ptr::null_mut());
+    let mut x: p::Vec = std::ptr::null_mut();
+    let code = p::SNESGetJacobian(
+        snes,
+        &mut a,
+        &mut pmat,
+        std::ptr::null_mut(),
+        std::ptr::null_mut(),
+    );
+    if code != 0 {
+        return code;
+    }
+    let mut assembled = p::PetscBool::PETSC_FALSE;
+    if a.is_null()
+        || p::MatAssembled(a, &mut assembled) != 0
+        || assembled != p::PetscBool::PETSC_TRUE
+    {
+        *floor = 0.0;
+        return 0;
+    }
+    let code = p::SNESGetSolution(snes, &mut x);
+    if code != 0 {
+        return code;
+    }
+    let mut diagonal: p::Vec = std::ptr::null_mut();
+    let (mut largest, mut u_max) = (0.0, 0.0);
+    let code = p::VecDuplicate(x, &mut diagonal);
+    if code != 0 {
+        return code;
+    }
+    let mut code = p::MatGetDiagonal(a, diagonal);
+    if code == 0 {
+        code = p::VecNorm(diagonal, p::NormType::NORM_INFINITY, &mut largest);
+    }
+    let destroyed = p::VecDestroy(&mut diagonal);
+    if code != 0 || destroyed != 0 {
+        return if code != 0 { code } else { destroyed };
+    }
+    let code = p::VecNorm(x, p::NormType::NORM_INFINITY, &mut u_max);
+    if code != 0 {
+        return code;
+    }
+    *floor = ROUND_OFF_FACTOR * f64::EPSILON * largest * (length + u_max);
     0
 }
 

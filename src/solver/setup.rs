@@ -147,6 +147,13 @@ impl Linear {
         if scene.is_linear() {
             snes.freeze_jacobian()?;
         }
+        let length = scene
+            .mesh
+            .coords
+            .iter()
+            .flatten()
+            .fold(0.0, |m: f64, c| m.max(c.abs()));
+        snes.set_round_off_length(length);
         Ok(Linear {
             choice,
             pattern,

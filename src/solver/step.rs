@@ -521,9 +521,13 @@ impl Run<'_> {
             0 => String::new(),
             n => format!(" ({n} Uzawa augmentations)"),
         };
+        let floor = match self.linear.snes.round_off_floor() {
+            (floor, true) => format!(" (below its round-off floor {floor:.1e})"),
+            _ => String::new(),
+        };
         self.say(format!(
-            "  step {step} load {load:.6}: {} Newton its{uzawa}, |F| {residual:.3e}, {} linear \
-             its{}, {:.2} s",
+            "  step {step} load {load:.6}: {} Newton its{uzawa}, |F| {residual:.3e}{floor}, {} \
+             linear its{}, {:.2} s",
             solved.counted.newton,
             solved.counted.linear,
             retries_note(
