@@ -53,6 +53,12 @@ fn a_step_that_cannot_be_cut_fails_clearly() {
         lines[0]
     );
     assert!(lines[0].contains("did not converge"), "{}", lines[0]);
+    // Why, and what to change.
+    assert!(
+        lines[0].contains("an inverted element): more load steps (steps.count)"),
+        "{}",
+        lines[0]
+    );
     let s = common::summary(&out_dir);
     assert_eq!(s["converged"], false);
     assert!(s["message"].as_str().unwrap().contains("inverted"));

@@ -41,9 +41,52 @@ pub(super) fn describe(limit: &CutLimit, dt: f64, max_cuts: usize) -> String {
     }
 }
 
+/// Why a solve that ended a run failed, and what in the case file to change, for its last line
+/// (`reason`: PETSc's converged reason; `domain_error`: the solve met an unusable state).
+pub(super) fn what_to_change(reason: &str, domain_error: bool) -> &'static str {
+    match reason {
+        _ if domain_error => {
+            "an iterate left the domain (an inverted element): more load steps \
+                              (steps.count) or more cuts (steps.max_cuts)"
+        }
+        "DIVERGED_MAX_IT" => {
+            "Newton did not reach newton.atol or newton.rtol within \
+                              newton.max_it iterations: more load steps (steps.count), a larger \
+                              newton.max_it, or a smaller penalty"
+        }
+        "DIVERGED_LINE_SEARCH" => {
+            "the line search found no decrease of the residual: more load \
+                                   steps (steps.count) or a smaller penalty"
+        }
+        "DIVERGED_DTOL" => {
+            "the residual grew or cycled between contact states: more load steps \
+                            (steps.count) or a smaller penalty"
+        }
+        "DIVERGED_LINEAR_SOLVE" => {
+            "the linear solve failed: newton.linear_solver = \"direct\", \
+                                    or constrain a body left free to move"
+        }
+        "DIVERGED_FNORM_NAN" => {
+            "the residual is not finite: more load steps (steps.count), or \
+                                 check the material constants and loads"
+        }
+        _ => "more load steps (steps.count) or more cuts (steps.max_cuts)",
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    use super::{cut_limit, CutLimit};
+    use super::{cut_limit, what_to_change, CutLimit};
+
+    /// Each failure names what to change, the domain error first whatever PETSc's reason.
+    #[test]
+    fn a_failure_says_what_to_change() {
+        assert!(what_to_change("DIVERGED_MAX_IT", false).contains("newton.max_it"));
+        assert!(what_to_change("DIVERGED_LINE_SEARCH", false).contains("line search"));
+        assert!(what_to_change("DIVERGED_LINEAR_SOLVE", false).contains("linear_solver"));
+        assert!(what_to_change("DIVERGED_MAX_IT", true).contains("inverted"));
+        assert!(what_to_change("DIVERGED_TR_DELTA", false).contains("steps.count"));
+    }
 
     /// `steps.max_cuts = 2`, nominal step 0.01: a step cut twice in a row has no cut left; a
     /// step at a quarter of the nominal one after one cut in a row (cut twice before, then

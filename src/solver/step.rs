@@ -13,7 +13,7 @@ use crate::model::Augmented;
 use crate::petsc::{CallbackError, SnesOutcome};
 
 use super::assembly;
-use super::cut::{cut_limit, describe};
+use super::cut::{cut_limit, describe, what_to_change};
 use super::evaluation::{Evaluation, Verdict};
 use super::predictor::{predict, NewtonTangent};
 use super::results::StepRow;
@@ -385,8 +385,9 @@ impl Run<'_> {
             }
         ));
         if let Some(limit) = limit {
+            let advice = what_to_change(outcome.reason, outcome.domain_error.is_some());
             self.summary.message = Some(format!(
-                "step {} (load {}) did not converge after {} cut(s), {limit}: {why}",
+                "step {} (load {}) did not converge after {} cut(s), {limit}: {why}; {advice}",
                 self.state.step + 1,
                 Load(t_new),
                 self.state.cuts_in_row - 1
