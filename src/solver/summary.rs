@@ -209,11 +209,7 @@ impl super::Run<'_> {
 
 /// The peak resident memory of every rank, in MB (*collective*); empty when a rank cannot say.
 fn peak_memory_of_ranks(world: &mpi::topology::SimpleCommunicator) -> Vec<f64> {
-    use mpi::collective::CommunicatorCollectives;
-    use mpi::topology::Communicator;
-    let mine = crate::memory::peak_mb().unwrap_or(-1.0);
-    let mut all = vec![0.0; world.size() as usize];
-    world.all_gather_into(&mine, &mut all[..]);
+    let all = of_every_rank(crate::memory::peak_mb().unwrap_or(-1.0), world);
     if all.iter().any(|&m| m < 0.0) {
         Vec::new()
     } else {
@@ -229,9 +225,14 @@ fn contact_seconds_of_ranks(
     timings: &std::collections::BTreeMap<String, f64>,
     world: &mpi::topology::SimpleCommunicator,
 ) -> Vec<f64> {
+    let mine: f64 = CONTACT_PHASES.iter().filter_map(|p| timings.get(*p)).sum();
+    of_every_rank(mine, world)
+}
+
+/// `mine` of every rank, by rank (*collective*).
+fn of_every_rank(mine: f64, world: &mpi::topology::SimpleCommunicator) -> Vec<f64> {
     use mpi::collective::CommunicatorCollectives;
     use mpi::topology::Communicator;
-    let mine: f64 = CONTACT_PHASES.iter().filter_map(|p| timings.get(*p)).sum();
     let mut all = vec![0.0; world.size() as usize];
     world.all_gather_into(&mine, &mut all[..]);
     all
