@@ -171,10 +171,7 @@ fn worker(case: &Path) {
     let petsc = Petsc::initialize(&["bench-worker".into()], None)
         .unwrap_or_else(|e| panic!("PETSc initialization failed: {e}"));
     let scene = Scene::load(case).unwrap_or_else(|e| panic!("benchmark scene does not load: {e}"));
-    let opts = RunOptions {
-        out_dir: out_dir(case),
-        quiet: true,
-    };
+    let opts = RunOptions::new(out_dir(case), true);
     let t = Instant::now();
     let summary = run(&scene, &petsc, &opts).unwrap_or_else(|e| panic!("run failed: {e}"));
     let seconds = t.elapsed().as_secs_f64();
@@ -217,10 +214,7 @@ fn newton_step(c: &mut Criterion, petsc: &Petsc, root: &Path) {
         let case = write_case(&root.join(label), vtu_every);
         let scene =
             Scene::load(&case).unwrap_or_else(|e| panic!("benchmark scene does not load: {e}"));
-        let opts = RunOptions {
-            out_dir: out_dir(&case),
-            quiet: true,
-        };
+        let opts = RunOptions::new(out_dir(&case), true);
         let name = format!("hex8_{DIVISIONS}x{DIVISIONS}x{DIVISIONS}");
         let full_id = format!("newton_step/{name}/{label}");
         // Filled only when the benchmark actually runs (not for `--list` or a filtered-out id).

@@ -50,6 +50,10 @@ pub enum Error {
     /// ([`crate::interrupt`]): the signal and what was finished.
     #[error("{0}")]
     Interrupted(String),
+    /// A restart refused (no checkpoint, a damaged one, one of another case, mesh, rank count
+    /// or program version), agreed on by every rank; nothing in the output folder changed.
+    #[error("restart: {0}")]
+    Restart(String),
     /// Declared expectations (`expect`) that the measured metrics do not meet.
     #[error("expect: {0}")]
     Expectation(String),
@@ -75,6 +79,7 @@ impl Error {
                 | Error::Output(_)
                 | Error::Solve(_)
                 | Error::Interrupted(_)
+                | Error::Restart(_)
                 | Error::Expectation(_)
         )
     }

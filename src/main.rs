@@ -1,7 +1,7 @@
 //! The `mortar` command line.
 //!
 //! ```text
-//! mortar run CASE.toml [--out DIR] [--quiet] [PETSc options...]
+//! mortar run CASE.toml [--out DIR | --restart DIR] [--quiet] [PETSc options...]
 //! mortar check CASE.toml
 //! mortar study STUDY.toml [--out DIR] [--quiet] [PETSc options...]
 //! mortar scaling LOG_1 LOG_2 ... [--out DIR]
@@ -54,6 +54,10 @@ enum Command {
         /// Do not run the scene's figure study (`output.figure`) after the scene.
         #[arg(long)]
         no_figure: bool,
+        /// Go on from the last checkpoint of the run in this output folder, writing into it
+        /// (`output.checkpoint_every`).
+        #[arg(long, value_name = "DIR")]
+        restart: Option<PathBuf>,
         /// PETSc options, passed to PETSc unchanged.
         #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
         petsc: Vec<String>,
@@ -173,14 +177,15 @@ fn pull_our_options(args: &[String]) -> Result<Vec<String>, String> {
     let mut it = args[run_at + 1..].iter();
     while let Some(a) = it.next() {
         match a.as_str() {
-            "--out" => {
+            "--out" | "--restart" if is_run || a == "--out" => {
                 head.push(a.clone());
                 match it.next() {
                     Some(v) if !v.starts_with('-') => head.push(v.clone()),
-                    _ => return Err("--out needs a folder (--out DIR)".into()),
+                    _ => return Err(format!("{a} needs a folder ({a} DIR)")),
                 }
             }
             s if s.starts_with("--out=") || matches!(s, "--quiet" | "-q") => head.push(a.clone()),
+            s if is_run && s.starts_with("--restart=") => head.push(a.clone()),
             "--no-figure" if is_run => head.push(a.clone()),
             _ => rest.push(a.clone()),
         }
@@ -217,8 +222,13 @@ fn execute(cli: Cli, program: String) -> Result<()> {
             out,
             quiet,
             no_figure,
+            restart,
             petsc,
-        } => run_command(&case, !no_figure, Launch::new(out, quiet, program, petsc)),
+        } => {
+            let mut launch = Launch::new(out, quiet, program, petsc);
+            launch.restart_from(restart)?;
+            run_command(&case, !no_figure, launch)
+        }
         Command::Study {
             study,
             out,
@@ -257,6 +267,8 @@ struct Launch {
     /// Output folder; default: `out/<name>` of the scene or study.
     out: Option<PathBuf>,
     quiet: bool,
+    /// Go on from the checkpoint in `out` (`run --restart`).
+    restart: bool,
     /// The program's name and the PETSc options of the command line.
     program: String,
     petsc_options: Vec<String>,
@@ -267,9 +279,26 @@ impl Launch {
         Launch {
             out,
             quiet,
+            restart: false,
             program,
             petsc_options: petsc,
         }
+    }
+
+    /// `run --restart DIR`: the run goes on in DIR, which `--out` may only repeat.
+    fn restart_from(&mut self, dir: Option<PathBuf>) -> Result<()> {
+        let Some(dir) = dir else {
+            return Ok(());
+        };
+        if self.out.as_ref().is_some_and(|out| out != &dir) {
+            return Err(Error::Other(format!(
+                "--restart {} goes on in that folder: leave out --out",
+                dir.display()
+            )));
+        }
+        self.out = Some(dir);
+        self.restart = true;
+        Ok(())
     }
 }
 
@@ -345,10 +374,7 @@ fn run_figure(
     world: &SimpleCommunicator,
     scene_options: &RunOptions,
 ) -> Result<()> {
-    let options = RunOptions {
-        out_dir: scene_options.out_dir.join("figure"),
-        quiet: scene_options.quiet,
-    };
+    let options = RunOptions::new(scene_options.out_dir.join("figure"), scene_options.quiet);
     if world.rank() == 0 && !options.quiet {
         println!(
             "mortar: the scene's figure: {} -> {}",
@@ -379,6 +405,7 @@ fn start<T: Input>(load: impl FnOnce() -> Result<T>, launch: Launch) -> Result<S
     let options = RunOptions {
         out_dir: launch.out.unwrap_or_else(|| default_out(input.name())),
         quiet: launch.quiet,
+        restart: launch.restart,
     };
     let mut petsc_args = vec![launch.program];
     petsc_args.extend(launch.petsc_options);

@@ -533,6 +533,16 @@ fn interface_rows() -> Vec<Row> {
             "interface[0].uzawa_slip_tol",
         ),
         check(
+            "contact_zero_uzawa_slip_motion",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\nuzawa_slip_motion = 0.0\n"),
+            "interface[0].uzawa_slip_motion",
+        ),
+        check(
+            "uzawa_slip_motion_on_tied_interface",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"tied\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\nuzawa_slip_motion = 0.1\n"),
+            "interface[0].uzawa_slip_motion: only for kind = \"contact\"",
+        ),
+        check(
             "contact_unknown_method",
             valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\nmethod = \"nts\"\n"),
             "interface[0].method",
@@ -770,9 +780,19 @@ fn overflow_rows() -> Vec<Row> {
             "the tangential_penalty (1e11)",
         ),
         check(
-            "penalty_growth_default_cap_overflowing",
-            valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\npenalty = 1e11\npenalty_growth = 2.0\n"),
-            "interface[0].penalty_growth_cap (default 100)",
+            "penalty_growth_cap_overflowing_the_range",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\npenalty = 1e10\npenalty_growth = 2.0\npenalty_growth_cap = 1e3\n"),
+            "interface[0].penalty_growth_cap = 1000",
+        ),
+        check(
+            "frictionless_contact_penalty_above_its_bound",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\npenalty = 1e11\n"),
+            "interface[0].penalty = 100000000000: must lie in [1e-6, 1e10] (a factor of E/h) for frictionless contact",
+        ),
+        check(
+            "frictional_contact_penalty_above_its_bound",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\nfriction = 0.2\npenalty = 1e4\n"),
+            "interface[0].penalty = 10000: must lie in [1e-6, 1e3] (a factor of E/h) for contact with friction",
         ),
         check(
             "gradient_displacement_overflowing",
@@ -1041,13 +1061,13 @@ fn valid_scene_runs() {
     assert!(nan.is_empty(), "NaN in {nan:?}");
 }
 
-/// The ends of the documented ranges are accepted: a penalty of 1e12 E/h (the top of its range)
-/// with no growth, whose growth cap then bounds nothing.
+/// The ends of the documented ranges are accepted: a penalty of 1e10 E/h (the top of the range
+/// of frictionless contact) with no growth, whose growth cap then bounds nothing.
 #[test]
 fn range_ends_are_accepted() {
     let row = check(
         "penalty_at_the_top_of_its_range",
-        valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\npenalty = 1e12\n"),
+        valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\npenalty = 1e10\n"),
         "",
     );
     let o = execute(&row).unwrap_or_else(|e| panic!("{e}"));

@@ -39,6 +39,18 @@ pub(super) const MAX_UZAWA: usize = 1000;
 /// swamps or vanishes against the bulk's in double precision.
 pub(super) const PENALTY_RANGE: (f64, f64) = (1e-6, 1e12);
 
+/// The largest normal `penalty` of a contact interface without friction: above it Newton's
+/// residual stalls at the round-off of its own assembly even on the contact patch test (1e10
+/// converges, 1e12 does not; docs/verification.md, "Extremes").
+pub(super) const MAX_FRICTIONLESS_CONTACT_PENALTY: f64 = 1e10;
+
+/// The largest normal `penalty` of a contact interface with friction: above it the Coulomb
+/// cone, mu times a pressure that a tiny penetration changes a lot, switches nodes between
+/// stick and slip from one Newton iterate to the next, and the sliding blocks no longer
+/// converge (1e3 does, in 403 iterations; 1e4, 1e8, 1e10 and 1e12 fail; docs/verification.md,
+/// "Extremes").
+pub(super) const MAX_FRICTIONAL_CONTACT_PENALTY: f64 = 1e3;
+
 /// Largest mesh a generator may build (hexahedra per part), so a typo in `divisions` is an
 /// error rather than an exhausted memory.
 pub(super) const MAX_GENERATED_ELEMENTS: usize = 20_000_000;
@@ -126,12 +138,18 @@ pub(super) fn check_quadrature_degree(key: &str, q: Option<usize>) -> Result<(),
 
 /// A penalty factor (`key` names it) within [`PENALTY_RANGE`].
 pub(super) fn check_penalty(key: &str, v: f64) -> Result<f64, String> {
-    if (PENALTY_RANGE.0..=PENALTY_RANGE.1).contains(&v) {
+    check_penalty_up_to(key, v, PENALTY_RANGE.1, "")
+}
+
+/// A penalty factor (`key` names it) from [`PENALTY_RANGE`]'s lower end up to `top`, the bound
+/// for `what` (named in the message, after the range).
+pub(super) fn check_penalty_up_to(key: &str, v: f64, top: f64, what: &str) -> Result<f64, String> {
+    if (PENALTY_RANGE.0..=top).contains(&v) {
         Ok(v)
     } else {
         Err(format!(
-            "{key} = {v}: must lie in [{:e}, {:e}] (a factor of E/h)",
-            PENALTY_RANGE.0, PENALTY_RANGE.1
+            "{key} = {v}: must lie in [{:e}, {top:e}] (a factor of E/h){what}",
+            PENALTY_RANGE.0
         ))
     }
 }

@@ -6,7 +6,8 @@ use crate::io::case_file::InterfaceSpec;
 use crate::mesh::{FaceRef, Mesh};
 
 use super::checks::{
-    check_file_name, check_penalty, check_positive, check_quadrature_degree, first_given, given,
+    check_file_name, check_penalty, check_penalty_up_to, check_positive, check_quadrature_degree,
+    first_given, given, MAX_FRICTIONAL_CONTACT_PENALTY, MAX_FRICTIONLESS_CONTACT_PENALTY,
     MAX_UZAWA, PENALTY_RANGE,
 };
 use super::{ContactMethod, Interface, InterfaceKind};
@@ -17,7 +18,10 @@ use super::{ContactMethod, Interface, InterfaceKind};
 const DEFAULT_TANGENTIAL_PENALTY: f64 = 1.0;
 /// Default Uzawa tolerance on the slip of sticking contact nodes (see the case key
 /// `uzawa_slip_tol` and docs/performance.md).
-const DEFAULT_UZAWA_SLIP_TOL: f64 = 1e-3;
+const DEFAULT_UZAWA_SLIP_TOL: f64 = 1e-6;
+
+/// The default `uzawa_slip_motion` (see `uzawa_slip_tol` and docs/performance.md).
+const DEFAULT_UZAWA_SLIP_MOTION: f64 = 1e-1;
 
 /// Every interface, with names unique among them.
 pub(super) fn build_interfaces(
@@ -63,9 +67,23 @@ fn build_interface(spec: &InterfaceSpec, key: &str, mesh: &Mesh) -> Result<Inter
     };
     check_carriers(mesh, key, carriers, method, scheme)?;
     let contact = kind == InterfaceKind::Contact;
-    let penalty = check_penalty(
+    let (top, what) = match (contact, spec.friction.unwrap_or(0.0) > 0.0) {
+        (false, _) => (PENALTY_RANGE.1, ""),
+        (true, false) => (
+            MAX_FRICTIONLESS_CONTACT_PENALTY,
+            " for frictionless contact",
+        ),
+        (true, true) => (
+            MAX_FRICTIONAL_CONTACT_PENALTY,
+            " for contact with friction: above it Newton does not converge on the frictional \
+             scenes",
+        ),
+    };
+    let penalty = check_penalty_up_to(
         &format!("{key}.penalty"),
         spec.penalty.unwrap_or(if contact { 100.0 } else { 1000.0 }),
+        top,
+        what,
     )?;
     let uzawa_tol = check_positive(
         &format!("{key}.uzawa_tol"),
@@ -107,6 +125,7 @@ fn build_interface(spec: &InterfaceSpec, key: &str, mesh: &Mesh) -> Result<Inter
         friction: friction.coefficient,
         tangential_penalty: friction.tangential_penalty,
         uzawa_slip_tol: friction.uzawa_slip_tol,
+        uzawa_slip_motion: friction.uzawa_slip_motion,
         penalty_growth: friction.penalty_growth,
         penalty_growth_cap: friction.penalty_growth_cap,
     })
@@ -124,7 +143,8 @@ fn kind(spec: &InterfaceSpec, key: &str) -> Result<InterfaceKind, String> {
         }
     };
     if kind == InterfaceKind::Tied {
-        let contact_only = given!(spec; friction, tangential_penalty, uzawa_slip_tol, method,
+        let contact_only = given!(spec; friction, tangential_penalty, uzawa_slip_tol,
+            uzawa_slip_motion, method,
             penalty_growth, penalty_growth_cap);
         if let Some(k) = first_given(&contact_only) {
             return Err(format!("{key}.{k}: only for kind = \"contact\""));
@@ -188,6 +208,7 @@ struct Friction {
     coefficient: f64,
     tangential_penalty: f64,
     uzawa_slip_tol: f64,
+    uzawa_slip_motion: f64,
     penalty_growth: f64,
     penalty_growth_cap: f64,
 }
@@ -211,6 +232,10 @@ impl Friction {
         let uzawa_slip_tol = check_positive(
             &format!("{key}.uzawa_slip_tol"),
             spec.uzawa_slip_tol.unwrap_or(DEFAULT_UZAWA_SLIP_TOL),
+        )?;
+        let uzawa_slip_motion = check_positive(
+            &format!("{key}.uzawa_slip_motion"),
+            spec.uzawa_slip_motion.unwrap_or(DEFAULT_UZAWA_SLIP_MOTION),
         )?;
         let penalty_growth = spec.penalty_growth.unwrap_or(1.0);
         if !(penalty_growth >= 1.0 && penalty_growth.is_finite()) {
@@ -244,6 +269,7 @@ impl Friction {
             coefficient,
             tangential_penalty,
             uzawa_slip_tol,
+            uzawa_slip_motion,
             penalty_growth,
             penalty_growth_cap,
         })

@@ -111,6 +111,8 @@ impl Scene {
             continue_on_failure,
             newton: file.newton.clone(),
             vtu_every: file.output.vtu_every,
+            checkpoint_every: file.output.checkpoint_every,
+            case_digest: crate::io::checkpoint::Fnv64::of_debug(&file),
             verification,
         })
     }

@@ -177,6 +177,9 @@ pub struct Interface {
     pub tangential_penalty: f64,
     /// Contact: Uzawa tolerance on the slip of sticking nodes (fraction of h_A).
     pub uzawa_slip_tol: f64,
+    /// Contact: Uzawa tolerance on the slip of sticking nodes, as a fraction of the step's
+    /// tangential motion of the node (the larger of the two tolerances holds).
+    pub uzawa_slip_motion: f64,
     /// Contact: penalty growth factor (1 = off) and cap (multiple of the initial penalties).
     pub penalty_growth: f64,
     pub penalty_growth_cap: f64,
@@ -263,6 +266,12 @@ pub struct Scene {
     pub continue_on_failure: bool,
     pub newton: crate::io::case_file::NewtonSpec,
     pub vtu_every: usize,
+    /// Checkpoint every this many finished steps and at the last (`output.checkpoint_every`;
+    /// 0: none).
+    pub checkpoint_every: usize,
+    /// The FNV-1a hash of the case file as read (after a study's edits): a checkpoint is
+    /// restarted only by the case that wrote it.
+    pub case_digest: u64,
     pub verification: Option<Verification>,
 }
 

@@ -310,18 +310,29 @@ pub struct InterfaceSpec {
     /// covered by the primary surface has its penalties divided by its coverage (below 5 %
     /// coverage its traction fades out: `contact::frictional`). Default 1000 for tied
     /// interfaces (one pass then needs 1-3 Uzawa augmentations) and 100 for contact. Must lie
-    /// in [1e-6, 1e12].
+    /// in [1e-6, 1e12] for tied interfaces, [1e-6, 1e10] for frictionless contact and
+    /// [1e-6, 1e3] for contact with friction (above these Newton does not converge: the
+    /// residual stalls at round-off, or the Coulomb cone switches nodes between stick and slip;
+    /// docs/verification.md, "Extremes").
     pub penalty: Option<f64>,
     /// Uzawa augmentations stop when every violation is below this fraction of h_A. Tied: the
     /// gap |g_A| / a_A; default 1e-12 (the tied patch test holds to 1e-10). Contact: the
     /// penetration gh_A of every pressed node; default 1e-6.
     pub uzawa_tol: Option<f64>,
     /// Contact with friction: augmentations also go on while the slip |dsh_A| of a sticking
-    /// node is above this fraction of h_A. Default 1e-3, chosen with
-    /// `cases/sliding_blocks/study_uzawa.toml` (docs/performance.md). With the default
-    /// tangential penalty a plain Uzawa update removes only part of a sticking node's slip, so
-    /// much tighter tolerances exceed any sensible `uzawa_max`.
+    /// node is above this fraction of h_A and above `uzawa_slip_motion` times the interface's
+    /// motion: a floor, for an interface that hardly moves. Default 1e-6, chosen with
+    /// `cases/stick_phase/study.toml` (docs/performance.md). With the default tangential
+    /// penalty a plain Uzawa update removes only part of a sticking node's slip, so much
+    /// tighter tolerances exceed any sensible `uzawa_max`.
     pub uzawa_slip_tol: Option<f64>,
+    /// Contact with friction: a sticking node's slip may be up to this fraction of the
+    /// interface's tangential motion over the step (the largest tangential displacement of its
+    /// pressed traction nodes since the last step; the larger of this and `uzawa_slip_tol`
+    /// holds), so that the slip a penalty leaves stays small against the motion that loads the
+    /// interface, whatever the motion's size against the mesh. Default 1e-1, chosen with
+    /// `cases/stick_phase/study.toml` (docs/performance.md).
+    pub uzawa_slip_motion: Option<f64>,
     /// At most this many augmentations per load step (0: plain penalty). Default 0 for two
     /// passes: on dissimilar meshes the two passes' weak conditions cannot both hold exactly,
     /// so augmenting them drives a tied interface into locking and never meets a contact
@@ -521,6 +532,11 @@ pub struct OutputSpec {
     /// 0 writes none. Default 1.
     #[serde(default = "one")]
     pub vtu_every: usize,
+    /// Write a checkpoint every this many finished steps, and at the last finished step of
+    /// the run, into `<out>/checkpoint/` (`mortar run CASE --restart DIR` goes on from it).
+    /// 0 writes none. Default 0.
+    #[serde(default)]
+    pub checkpoint_every: usize,
     /// Sets whose reaction forces go into the history (node or face sets with constrained
     /// dofs). Default: every set named in `dirichlet` and `symmetry`.
     pub reactions: Option<Vec<String>>,
@@ -538,6 +554,7 @@ impl Default for OutputSpec {
     fn default() -> Self {
         OutputSpec {
             vtu_every: 1,
+            checkpoint_every: 0,
             reactions: None,
             track: Vec::new(),
             figure: None,

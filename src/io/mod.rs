@@ -2,6 +2,7 @@
 //! PETSc's performance logs.
 
 pub mod case_file;
+pub mod checkpoint;
 pub mod gmsh;
 pub mod output;
 pub mod petsc_log;

@@ -14,6 +14,7 @@
 //! | a cut step | [`Contribution::save`], [`Contribution::restore`] | at a step's start, at a cut |
 //! | a converged step | [`Contribution::commit`] | after the step's VTU files, before its history row |
 //! | output | [`Contribution::output`], [`Contribution::history`] | per step written |
+//! | checkpoint, restart | [`Contribution::write_state`], [`Contribution::read_state`] | after a commit; at a restart's set-up |
 //! | summary | [`Contribution::metrics`] | at the end of a run |
 //!
 //! A contribution never touches PETSc: it hands out **blocks** over mesh nodes (three dofs per
@@ -82,6 +83,20 @@ impl ForceSink for NodalForces<'_> {
         }
         Ok(())
     }
+}
+
+/// Where a contribution writes the state a restarted run needs ([`Contribution::write_state`]):
+/// named arrays, kept bit for bit (`io::checkpoint`).
+pub trait StateSink {
+    fn f64s(&mut self, name: &str, values: &[f64]);
+    fn u64s(&mut self, name: &str, values: &[u64]);
+}
+
+/// Where a restarted contribution reads its state back, in the order it was written: an
+/// array of another name is an error naming both.
+pub trait StateSource {
+    fn f64s(&mut self, name: &str) -> Result<Vec<f64>>;
+    fn u64s(&mut self, name: &str) -> Result<Vec<u64>>;
 }
 
 /// Where a residual or tangent evaluation found an inverted element.
@@ -265,6 +280,16 @@ pub trait Contribution {
     /// (*collective*).
     fn commit(&mut self, _at: &State, _world: &SimpleCommunicator) {}
 
+    /// Writes what the next step needs of this contribution after a [`Contribution::commit`]
+    /// (a checkpoint): everything of it that carries over from one step to the next.
+    fn write_state(&self, _out: &mut dyn StateSink) {}
+
+    /// Reads back what [`Contribution::write_state`] wrote, into a contribution made afresh
+    /// for the same case on the same rank (a restart).
+    fn read_state(&mut self, _from: &mut dyn StateSource) -> Result<()> {
+        Ok(())
+    }
+
     /// Whether a Coulomb law is part of this contribution.
     fn is_frictional(&self) -> bool {
         false
@@ -374,6 +399,16 @@ impl Model {
     /// [`Contribution::commit`] of every part (*collective*).
     pub fn commit(&mut self, at: &State, world: &SimpleCommunicator) {
         self.parts.iter_mut().for_each(|c| c.commit(at, world));
+    }
+
+    /// [`Contribution::write_state`] of every part.
+    pub fn write_state(&self, out: &mut dyn StateSink) {
+        self.parts.iter().for_each(|c| c.write_state(out));
+    }
+
+    /// [`Contribution::read_state`] of every part.
+    pub fn read_state(&mut self, from: &mut dyn StateSource) -> Result<()> {
+        self.parts.iter_mut().try_for_each(|c| c.read_state(from))
     }
 
     /// [`Contribution::iteration_report`] of every part (*collective*).

@@ -131,6 +131,36 @@ impl Pattern {
         }
     }
 
+    /// The pattern as numbers (a checkpoint): per node with a row, the node, its number of
+    /// coupled nodes, and those.
+    pub fn to_codes(&self) -> Vec<u64> {
+        let mut codes = Vec::new();
+        for (n, coupled) in self.rows.iter().enumerate().filter(|(_, c)| !c.is_empty()) {
+            codes.extend([n as u64, coupled.len() as u64]);
+            codes.extend(coupled.iter().map(|&m| m as u64));
+        }
+        codes
+    }
+
+    /// The pattern of [`Pattern::to_codes`], for the nodes of `dofs`; `None` if the codes do
+    /// not fit them.
+    pub fn from_codes(dofs: &DofMap, codes: &[u64]) -> Option<Pattern> {
+        let nodes = dofs.node_owner.len();
+        let mut rows = vec![Vec::new(); nodes];
+        let mut rest = codes;
+        while let [n, len, tail @ ..] = rest {
+            let (n, len) = (usize::try_from(*n).ok()?, usize::try_from(*len).ok()?);
+            let coupled = tail.get(..len)?;
+            let row: Vec<usize> = coupled.iter().map(|&m| m as usize).collect();
+            if n >= nodes || row.iter().any(|&m| m >= nodes) {
+                return None;
+            }
+            *rows.get_mut(n)? = row;
+            rest = &tail[len..];
+        }
+        rest.is_empty().then_some(Pattern { rows })
+    }
+
     /// Adds the couplings `parts` hand out at `at`, in the rows of the nodes this rank owns;
     /// returns true if a row gained a column.
     pub fn add<'a>(
@@ -269,6 +299,14 @@ mod tests {
             assert!(pattern.add(&dofs, &at, parts()));
             assert_eq!(pattern.sparsity(&dofs).rows, expected.rows, "rank {rank}");
             assert!(!pattern.add(&dofs, &at, parts()));
+            // As a checkpoint keeps it.
+            let codes = pattern.to_codes();
+            let back = Pattern::from_codes(&dofs, &codes).unwrap();
+            assert_eq!(back.rows, pattern.rows, "rank {rank}");
+            assert!(Pattern::from_codes(&dofs, &codes[..codes.len() - 1]).is_none());
+            let mut far = codes.clone();
+            far[0] = dofs.node_owner.len() as u64;
+            assert!(Pattern::from_codes(&dofs, &far).is_none());
         }
         constrained
     }

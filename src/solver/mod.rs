@@ -28,6 +28,8 @@
 //! summary of what finished (with `"converged": false`). A run stopped by SIGINT or SIGTERM
 //! ([`crate::interrupt`]: polled, collectively, before every step and every Jacobian) ends
 //! there: its summary keeps the finished steps and says `interrupted by ...` in `message`.
+//! With `output.checkpoint_every`, finished steps leave checkpoints that `--restart` goes on
+//! from, to the same answer bit for bit (`checkpoint`).
 //!
 //! # Modules
 //!
@@ -38,9 +40,11 @@
 //! - `evaluation`, `assembly`: the model evaluated at a Newton iterate and put into PETSc.
 //! - `summary`: the run's metrics, progress notes and last line.
 //! - `results`: the files a run writes.
+//! - `checkpoint`: checkpoints, and runs restarted from them.
 //! - `collective`: agreement between ranks.
 
 mod assembly;
+mod checkpoint;
 mod collective;
 mod cut;
 mod evaluation;
@@ -122,6 +126,19 @@ pub struct RunOptions {
     pub out_dir: PathBuf,
     /// No progress lines on rank 0.
     pub quiet: bool,
+    /// Go on from the last checkpoint in `out_dir` (`checkpoint`).
+    pub restart: bool,
+}
+
+impl RunOptions {
+    /// A run from the start into `out_dir`.
+    pub fn new(out_dir: PathBuf, quiet: bool) -> RunOptions {
+        RunOptions {
+            out_dir,
+            quiet,
+            restart: false,
+        }
+    }
 }
 
 /// What a run works with and keeps from its set-up to its end.
@@ -149,6 +166,8 @@ struct Run<'a> {
     fallback_line_search: Option<&'static str>,
     /// Print the contact state of every Newton iterate ([`CONTACT_MONITOR`]).
     contact_monitor: bool,
+    /// The step of the last checkpoint written or restarted from.
+    checkpointed: Option<usize>,
     started: Instant,
 }
 
@@ -190,6 +209,14 @@ pub fn run(scene: &Scene, petsc: &Petsc, opts: &RunOptions) -> Result<Summary> {
         scene.steps
     ));
     run.say(format!("  linear solver: {}", run.linear.choice.why));
+    if opts.restart {
+        run.say(format!(
+            "  restarted from the checkpoint of step {} (load {}) in {}",
+            run.state.step,
+            summary::Load(run.state.t),
+            opts.out_dir.display()
+        ));
+    }
     // Everything from here may fail on one rank only (I/O, say) while the others wait in a
     // collective call; such an error aborts the job *here*, while the PETSc objects are alive:
     // destroying them (MUMPS in particular) is itself collective and would hang.
@@ -217,15 +244,17 @@ impl Run<'_> {
         }
     }
 
-    /// Steps until the load path is complete, a step fails for good, or a signal stops it.
+    /// Steps until the load path is complete, a step fails for good, or a signal stops it;
+    /// checkpoints every `output.checkpoint_every` steps and at the last finished step.
     fn steps(&mut self) -> Result<()> {
         while !self.state.finished() {
             match self.step()? {
+                StepEnd::Finished if self.checkpoint_due() => self.write_checkpoint()?,
                 StepEnd::Finished | StepEnd::Cut => {}
                 StepEnd::Stopped | StepEnd::GaveUp => break,
             }
         }
-        Ok(())
+        self.write_checkpoint()
     }
 
     /// An error that ended the run before its summary said so (a singular tangent, a failed

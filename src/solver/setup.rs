@@ -11,7 +11,7 @@ use crate::case::Scene;
 use crate::contact::frictional::ContactInterfaces;
 use crate::contact::tying::TiedInterfaces;
 use crate::dofs::DofMap;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::io::output::Summary;
 use crate::model::{Contribution, Model};
 use crate::petsc::log::Phases;
@@ -20,6 +20,8 @@ use crate::petsc::{options, Matrix, Petsc, Scatter, Snes, Vector};
 use crate::solid::Bulk;
 
 use super::assembly::Pattern;
+use super::checkpoint;
+use super::collective::agree_on;
 use super::evaluation::{Evaluation, Evaluator};
 use super::linear;
 use super::predictor::{NewtonTangent, Tangent};
@@ -65,10 +67,14 @@ impl<'a> Run<'a> {
         let linear = Linear::new(&cx, &model, x)?;
         let fallback_line_search = (scene.has_friction() && linear.snes.line_search()? == "basic")
             .then_some(FALLBACK_LINE_SEARCH);
-        let results = Results::new(scene, &opts.out_dir, model.history_columns(), &cx.world)?;
-        drop(setup_stage);
-        phases.add("setup", started.elapsed().as_secs_f64());
-        Ok(Run {
+        // A refused restart leaves the folder as it was: checked before anything is written.
+        let resumed = opts
+            .restart
+            .then(|| checkpoint::open(scene, &opts.out_dir, (cx.rank, cx.ranks), &cx.world))
+            .transpose()?;
+        let out = (opts.out_dir.as_path(), opts.restart);
+        let results = Results::new(scene, out, model.history_columns(), &cx.world)?;
+        let mut run = Run {
             summary: Summary {
                 case: scene.name.clone(),
                 ranks: cx.ranks,
@@ -83,8 +89,22 @@ impl<'a> Run<'a> {
             state: RunState::new(scene),
             fallback_line_search,
             contact_monitor: options::has(CONTACT_MONITOR)?,
+            checkpointed: None,
             started,
-        })
+        };
+        if let Some(resumed) = resumed {
+            let resumed = run.resume(resumed);
+            let agreed = agree_on(&run.cx.world, resumed).map_err(|e| match e {
+                Error::Output(m) => Error::Restart(m),
+                e => e,
+            });
+            agreed?;
+            run.results.write_summary(&run.summary);
+            run.results.agree(&run.cx.world)?;
+        }
+        drop(setup_stage);
+        run.phases.add("setup", run.started.elapsed().as_secs_f64());
+        Ok(run)
     }
 }
 

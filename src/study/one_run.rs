@@ -178,14 +178,7 @@ impl Study {
         let result = crate::error::with_context(self.run_label(v, level), || {
             petsc.on_first_ranks(ranks, || {
                 self.scene(v, level).and_then(|scene| {
-                    solver::run(
-                        &scene,
-                        petsc,
-                        &RunOptions {
-                            out_dir: run_dir.to_path_buf(),
-                            quiet: true,
-                        },
-                    )
+                    solver::run(&scene, petsc, &RunOptions::new(run_dir.to_path_buf(), true))
                 })
             })
         });

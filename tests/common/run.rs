@@ -41,9 +41,13 @@ pub fn mortar_command() -> Command {
     c
 }
 
-/// The MPI environment every run needs here (see docs/guide.md, "System set-up").
+/// The MPI environment every run needs here (see docs/guide.md, "System set-up"), and one
+/// OpenMP thread per rank: SuperLU_DIST otherwise starts a thread per core in every rank,
+/// which under `--bind-to none` oversubscribes the cores, slows it many times over and makes its
+/// factorization differ from run to run.
 pub fn mpi_env(cmd: &mut Command) -> &mut Command {
-    cmd.env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+    cmd.env("OMP_NUM_THREADS", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
         .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
         .env("OMPI_MCA_mpi_yield_when_idle", "1")
 }

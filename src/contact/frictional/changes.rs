@@ -108,6 +108,24 @@ impl StateLog {
         self.pressed = pressed;
     }
 
+    /// The states of the last tangent evaluation, then the pressed counts (a checkpoint).
+    pub(crate) fn to_codes(&self) -> Vec<u64> {
+        let mut codes: Vec<u64> = self.states.iter().map(|&c| u64::from(c)).collect();
+        codes.extend(self.pressed);
+        codes
+    }
+
+    /// The inverse of [`StateLog::to_codes`] (a restart); an error when they are not codes.
+    pub(crate) fn set_codes(&mut self, codes: &[u64]) -> Result<(), ()> {
+        let (states, pressed) = codes.split_at(codes.len().checked_sub(2).ok_or(())?);
+        self.states = states
+            .iter()
+            .map(|&c| u8::try_from(c).map_err(|_| ()))
+            .collect::<Result<_, ()>>()?;
+        self.pressed = [pressed[0], pressed[1]];
+        Ok(())
+    }
+
     /// A load step (or a cut step's new attempt) starts: its count restarts.
     pub(crate) fn start_step(&mut self) {
         self.step = StateChanges::default();

@@ -33,7 +33,13 @@ impl ContactInterfaces {
         let mut result = Augmented::Converged;
         let mut worst = 0.0f64;
         for i in 0..self.interfaces.len() {
-            let updates = self.uzawa_updates(at, i);
+            let mut motion = 0.0;
+            world.all_reduce_into(
+                &self.interface_motion(at, i),
+                &mut motion,
+                SystemOperation::max(),
+            );
+            let updates = self.uzawa_updates(at, i, motion);
             let local = updates.iter().map(|u| u.2).fold(0.0, f64::max);
             let mut violation = 0.0;
             world.all_reduce_into(&local, &mut violation, SystemOperation::max());
@@ -60,11 +66,15 @@ impl ContactInterfaces {
     }
 
     /// The Uzawa update of every held node of interface `i`: `(pass, node, violation as a
-    /// multiple of its tolerance, new history)`.
+    /// multiple of its tolerance, new history)`. A sticking node's slip is measured against
+    /// the larger of `uzawa_slip_tol h_A` and `uzawa_slip_motion` times `motion`, the
+    /// interface's tangential motion over the step ([`ContactInterfaces::interface_motion`],
+    /// over every rank).
     pub(crate) fn uzawa_updates(
         &self,
         at: &State,
         i: usize,
+        motion: f64,
     ) -> Vec<(usize, usize, f64, NodeHistory)> {
         let iface = &self.interfaces[i];
         let mut out = Vec::new();
@@ -102,15 +112,43 @@ impl ContactInterfaces {
                     0.0
                 };
                 let dt = if iface.mu > 0.0 && f.status == 1 {
-                    norm(f.slip)
+                    let allowed =
+                        (iface.uzawa_slip_tol * st.h).max(iface.uzawa_slip_motion * motion);
+                    norm(f.slip) / allowed
                 } else {
                     0.0
                 };
-                let violation = (dn / iface.uzawa_tol).max(dt / iface.uzawa_slip_tol) / st.h;
+                let violation = (dn / iface.uzawa_tol / st.h).max(dt);
                 out.push((p, a, violation, new));
             }
         }
         out
+    }
+
+    /// How far interface `i` moved along itself over the step, on this rank: the largest
+    /// tangential displacement since the last converged step of a traction node it holds
+    /// that has an overlap. (Not each node's own: a node held on a symmetry plane does not
+    /// move while the other side's material passes over it.)
+    pub(crate) fn interface_motion(&self, at: &State, i: usize) -> f64 {
+        let iface = &self.interfaces[i];
+        let mut largest = 0.0f64;
+        for (p, pass) in iface.passes.iter().enumerate() {
+            for (a, f) in self.local_fields(at, i, p) {
+                if f.area > 0.0 {
+                    largest = largest.max(self.tangential_motion(at, pass.nodes[a], f.normal));
+                }
+            }
+        }
+        largest
+    }
+
+    /// The length of the tangential part (to `normal`) of node `node`'s displacement since the
+    /// last converged step.
+    fn tangential_motion(&self, at: &State, node: usize, normal: [f64; 3]) -> f64 {
+        let x = at.scene.mesh.coords[node];
+        let d: [f64; 3] = std::array::from_fn(|c| x[c] + at.u[3 * node + c] - self.x_old[node][c]);
+        let dn = d[0] * normal[0] + d[1] * normal[1] + d[2] * normal[2];
+        norm(std::array::from_fn(|c| d[c] - dn * normal[c]))
     }
 
     /// Closes a converged step at `at`: the tangential tractions, normals and weighted gaps

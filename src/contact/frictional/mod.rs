@@ -118,9 +118,10 @@
 //! no tangential constraint to meet). A node without traction (no overlap, or coverage below
 //! [`coverage::MIN_COVERAGE`]) has its multipliers released without counting a violation (they
 //! exert no force whatever their value); a fading node keeps them and counts none. Solves repeat
-//! while a penetration is above `uzawa_tol` or a slip above `uzawa_slip_tol` (both relative to
-//! `h_A`; the slip tolerance is looser because with the soft default tangential penalty each update
-//! removes only part of a sticking node's slip), at most `uzawa_max` times per step. With
+//! while a penetration is above `uzawa_tol` (relative to `h_A`) or a slip above the larger of
+//! `uzawa_slip_motion` times the interface's tangential motion over the step
+//! ([`ContactInterfaces::interface_motion`]) and `uzawa_slip_tol h_A` (docs/theory.md section
+//! 4), at most `uzawa_max` times per step. With
 //! `penalty_growth > 1`, an augmentation that did not bring the violation below a quarter of the
 //! previous one multiplies both penalties by that factor, up to `penalty_growth_cap`.
 //!
@@ -175,6 +176,7 @@
 //! The node-on-segment driver of a pass lives with its geometry in
 //! [`crate::contact::node_on_segment`].
 
+mod carried;
 mod changes;
 mod coverage;
 mod deal;
@@ -198,7 +200,8 @@ use crate::contact::mortar::{PalletSplit, RejectStats, TractionScheme};
 use crate::dofs::DofMap;
 use crate::error::Result;
 use crate::model::{
-    Augmentation, Contribution, DomainIssue, ForceSink, Output, State, TangentSink,
+    Augmentation, Contribution, DomainIssue, ForceSink, Output, State, StateSink, StateSource,
+    TangentSink,
 };
 use crate::petsc::log::Section;
 
@@ -250,6 +253,9 @@ pub struct ContactInterface {
     pub uzawa_tol: f64,
     /// Uzawa tolerance on the slip of sticking nodes (fraction of h_A).
     pub uzawa_slip_tol: f64,
+    /// Uzawa tolerance on the slip of sticking nodes (fraction of the node's tangential motion
+    /// over the step).
+    pub uzawa_slip_motion: f64,
     pub uzawa_max: usize,
     penalty_growth: f64,
     penalty_growth_cap: f64,
@@ -338,6 +344,7 @@ impl ContactInterfaces {
                 mu: iface.friction,
                 uzawa_tol: iface.uzawa_tol,
                 uzawa_slip_tol: iface.uzawa_slip_tol,
+                uzawa_slip_motion: iface.uzawa_slip_motion,
                 uzawa_max: iface.uzawa_max,
                 penalty_growth: iface.penalty_growth,
                 penalty_growth_cap: iface.penalty_growth_cap,
@@ -461,6 +468,14 @@ impl Contribution for ContactInterfaces {
             .map(|(changes, _)| changes.total())
             .collect();
         self.close_step(at);
+    }
+
+    fn write_state(&self, out: &mut dyn StateSink) {
+        self.write_carried(out)
+    }
+
+    fn read_state(&mut self, from: &mut dyn StateSource) -> Result<()> {
+        self.read_carried(from)
     }
 
     fn is_frictional(&self) -> bool {

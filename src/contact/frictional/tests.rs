@@ -110,7 +110,7 @@ fn uzawa_skips_fading_nodes_and_releases_nodes_without_traction() {
     };
 
     let fields = contact.local_fields(&at, 0, 0);
-    let updates = contact.uzawa_updates(&at, 0);
+    let updates = contact.uzawa_updates(&at, 0, 0.0);
     // Nodes without traction, fading, partly covered, wholly covered.
     let mut counts = [0; 4];
     for (a, f) in &fields {

@@ -126,21 +126,53 @@ impl RejectStats {
         self.quadrature_points += other.quadrature_points;
     }
 
+    /// The names of the counts, in the order of [`RejectStats::counts`].
+    pub const NAMES: [&'static str; 8] = [
+        "normals_not_opposed",
+        "non_convex",
+        "no_overlap",
+        "sliver",
+        "inverse_map_failed",
+        "non_finite",
+        "pairs_integrated",
+        "quadrature_points",
+    ];
+
+    /// The counts, in the order of [`RejectStats::NAMES`].
+    pub fn counts(&self) -> [usize; 8] {
+        [
+            self.normals_not_opposed,
+            self.non_convex,
+            self.no_overlap,
+            self.sliver,
+            self.inverse_map_failed,
+            self.non_finite,
+            self.pairs_integrated,
+            self.quadrature_points,
+        ]
+    }
+
+    /// The statistics of `counts` (in the order of [`RejectStats::NAMES`]).
+    pub fn from_counts(c: [usize; 8]) -> RejectStats {
+        RejectStats {
+            normals_not_opposed: c[0],
+            non_convex: c[1],
+            no_overlap: c[2],
+            sliver: c[3],
+            inverse_map_failed: c[4],
+            non_finite: c[5],
+            pairs_integrated: c[6],
+            quadrature_points: c[7],
+        }
+    }
+
     /// The counts by name (the field names), for summaries.
     pub fn to_map(&self) -> BTreeMap<String, usize> {
-        [
-            ("normals_not_opposed", self.normals_not_opposed),
-            ("non_convex", self.non_convex),
-            ("no_overlap", self.no_overlap),
-            ("sliver", self.sliver),
-            ("inverse_map_failed", self.inverse_map_failed),
-            ("non_finite", self.non_finite),
-            ("pairs_integrated", self.pairs_integrated),
-            ("quadrature_points", self.quadrature_points),
-        ]
-        .into_iter()
-        .map(|(k, v)| (k.to_string(), v))
-        .collect()
+        Self::NAMES
+            .iter()
+            .zip(self.counts())
+            .map(|(k, v)| (k.to_string(), v))
+            .collect()
     }
 }
 

@@ -69,7 +69,7 @@ use crate::error::Result;
 use crate::mesh::FaceRef;
 use crate::model::{
     Augmentation, Augmented, Contribution, DomainIssue, ForceSink, Output, RowField, State,
-    SurfaceOutput, TangentSink,
+    StateSink, StateSource, SurfaceOutput, TangentSink,
 };
 use crate::vec3::norm;
 
@@ -410,6 +410,26 @@ impl Contribution for TiedInterfaces {
             row.lambda = l;
         }
         self.saved = saved;
+    }
+
+    fn write_state(&self, out: &mut dyn StateSink) {
+        let lambda: Vec<f64> = self.rows().flat_map(|r| r.lambda).collect();
+        out.f64s("tied multipliers", &lambda);
+    }
+
+    fn read_state(&mut self, from: &mut dyn StateSource) -> Result<()> {
+        let lambda = from.f64s("tied multipliers")?;
+        let rows = self.rows().count();
+        if lambda.len() != 3 * rows {
+            return Err(crate::Error::Restart(format!(
+                "the checkpoint holds {} tied multipliers for {rows} tied rows",
+                lambda.len() / 3
+            )));
+        }
+        for (row, l) in self.rows_mut().zip(lambda.chunks_exact(3)) {
+            row.lambda = [l[0], l[1], l[2]];
+        }
+        Ok(())
     }
 
     fn output(&self, at: &State, world: &SimpleCommunicator) -> Vec<Output> {

@@ -96,6 +96,12 @@ impl History {
         &self.rows
     }
 
+    /// Replaces the rows (a restart: those of its checkpoint) and rewrites the file.
+    pub fn set_rows(&mut self, rows: Vec<Vec<f64>>) -> Result<()> {
+        self.rows = rows;
+        self.write()
+    }
+
     /// The column names.
     pub fn columns(&self) -> &[String] {
         &self.columns

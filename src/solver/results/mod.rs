@@ -30,6 +30,7 @@ use std::path::{Path, PathBuf};
 
 use mpi::collective::{CommunicatorCollectives, SystemOperation};
 
+mod carried;
 mod folder;
 mod interface;
 
@@ -91,12 +92,13 @@ pub struct Results {
 const POINT_FIELDS: [(&str, usize); 1] = [("displacement", 3)];
 
 impl Results {
-    /// Creates the output folders and removes an earlier run's outputs (rank 0; collective:
-    /// every rank returns the same [`Error::Output`] on failure), and sets the history columns
+    /// Creates the output folders and removes an earlier run's outputs, unless `restart`
+    /// (which keeps them: [`Results::read_state`] sorts them out) (rank 0; collective: every
+    /// rank returns the same [`Error::Output`] on failure), and sets the history columns
     /// (`contributions`: the model's own, after the tracked sets').
     pub fn new(
         scene: &Scene,
-        dir: &Path,
+        (dir, restart): (&Path, bool),
         contributions: Vec<String>,
         world: &mpi::topology::SimpleCommunicator,
     ) -> Result<Results> {
@@ -104,6 +106,7 @@ impl Results {
         let (rank, ranks) = (world.rank() as usize, world.size() as usize);
         let (prepared, lock) = if rank == 0 {
             match lock_folder(dir) {
+                Ok(lock) if restart => (Ok(()), lock),
                 Ok(lock) => (prepare_folder(dir, &scene.name), lock),
                 Err(e) => (Err(e), None),
             }
