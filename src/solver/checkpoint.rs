@@ -27,11 +27,13 @@
 //! goes on with the next step, appending to the history, the series and the summary.
 //!
 //! **The same answer, bit for bit.** On the same rank count the partition, the dofs and every
-//! evaluation are those of the run that wrote the checkpoint. One thing is not in a file: the
-//! factorization the linear solver holds, which the next step's predictor reuses under
-//! `steps.predictor_tangent = "last_newton"`. So the step after a checkpoint starts from the
-//! tangent assembled at the converged state instead, in the run that goes on as in the run
-//! restarted: both take the same path. (A checkpoint written at a stop that is not one of
+//! evaluation are those of the run that wrote the checkpoint. What the linear solver built is
+//! not in a file: the factorization the next step's predictor reuses under
+//! `steps.predictor_tangent = "last_newton"`, and the multigrid hierarchy PETSc keeps from one
+//! setup to the next (GAMG reuses its interpolation while the matrix stays the same object).
+//! So after a checkpoint the run goes on as a restart from it would: with a new matrix of the
+//! same pattern (and on the iterative path a new Newton solver), the next step's predictor
+//! assembling the tangent at the converged state. (A checkpoint written at a stop that is not one of
 //! every N is the exception: its restart starts the next step from that tangent where the run
 //! would have reused the factorization, and agrees with it to the Newton tolerance.)
 
@@ -44,11 +46,12 @@ use crate::error::{Error, Result};
 use crate::io::checkpoint::{Fnv64, Reader, Writer};
 use crate::io::output::{write_atomic, StepRecord};
 use crate::model::{StateSink, StateSource};
+use crate::petsc::LinearPath;
 
 use super::assembly::Pattern;
 use super::collective::agree_on;
 use super::predictor::NewtonTangent;
-use super::setup::new_matrix;
+use super::setup::{new_matrix, new_snes};
 use super::Run;
 
 /// The checkpoint folder in the output folder.
@@ -239,9 +242,30 @@ impl Run<'_> {
             let _ = std::fs::remove_file(path_of(dir, old, rank));
         }
         self.checkpointed = Some(step);
-        // The predictor of the next step cannot reuse a factorization a restart would not
-        // have (module docs).
-        self.linear.tangent.newton = NewtonTangent::Other;
+        self.as_a_restart_would_go_on()
+    }
+
+    /// The linear solver from here as a restart from this step sets it up: a new matrix of the
+    /// same pattern, and on the iterative path a new Newton solver, so that nothing built
+    /// before (a factorization the predictor would reuse, a multigrid hierarchy PETSc would
+    /// keep) carries over (module docs) (*collective*).
+    fn as_a_restart_would_go_on(&mut self) -> Result<()> {
+        let moves = self.model.parts().iter().any(|c| c.pattern_moves());
+        let l = &mut self.linear;
+        if l.choice.path != LinearPath::Direct {
+            // The interface split keeps its fields' matrices, and the bulk's multigrid its
+            // interpolation, through a new matrix. (Not on the direct path, where a new matrix
+            // suffices: Debian's PETSc 3.18 crashes in SuperLU_DIST's first factorization after
+            // a solver that used it was destroyed.)
+            let solver = (l.force_scale, l.choice.path);
+            l.snes = new_snes(&self.cx, &self.model, solver, &l.rigid_modes)?;
+        }
+        l.jac = new_matrix(&l.pattern, &self.cx.dofs, &l.rigid_modes)?;
+        if moves {
+            // As after the pattern grew (`step`): a moving stencil may reach past it.
+            l.jac.allow_new_nonzeros()?;
+        }
+        l.tangent.newton = NewtonTangent::Other;
         Ok(())
     }
 
@@ -315,9 +339,9 @@ impl Run<'_> {
             return Err(layout("solution"));
         }
         let codes = from.u64s("pattern")?;
-        let l = &mut self.linear;
-        l.pattern = Pattern::from_codes(&self.cx.dofs, &codes).ok_or_else(|| layout("pattern"))?;
-        l.jac = new_matrix(&l.pattern, &self.cx.dofs, &l.rigid_modes)?;
+        self.linear.pattern =
+            Pattern::from_codes(&self.cx.dofs, &codes).ok_or_else(|| layout("pattern"))?;
+        self.as_a_restart_would_go_on()?;
         self.model.read_state(from)?;
         self.results.read_state(from)?;
         if !from.at_end() {

@@ -194,6 +194,9 @@ struct Linear {
     tangent: Tangent,
     /// The linear solver of the Newton steps, and why.
     choice: linear::LinearChoice,
+    /// The force scale of Newton's absolute tolerance (the residual at rest under the full
+    /// load).
+    force_scale: f64,
 }
 
 /// Runs a scene; returns the summary (also written to `summary.json`).

@@ -149,32 +149,9 @@ impl Linear {
         let force_scale = residual_scale(&ev, &x)?;
         let interfaces = model.parts().len() > 1;
         let choice = linear::choose(scene, dofs.total_free, interfaces)?;
-        let mut snes = Snes::new(
-            Tolerances {
-                atol: scene.newton.atol * force_scale,
-                rtol: scene.newton.rtol,
-                stol: 1e-14,
-                max_it: scene.newton.max_it,
-            },
-            &options_source(scene),
-            "basic",
-            choice.path,
-        )?;
-        let owned = (dofs.owned_start, dofs.owned_count);
-        // The bulk field couples no two bodies: one set of six modes serves it.
-        let bulk_modes = crate::dofs::one_set_of_six(&rigid_modes);
-        snes.split_interface(&linear::interface_dofs(model, dofs), owned, &bulk_modes)?;
-        if scene.is_linear() {
-            snes.freeze_jacobian()?;
-        }
-        let length = scene
-            .mesh
-            .coords
-            .iter()
-            .flatten()
-            .fold(0.0, |m: f64, c| m.max(c.abs()));
-        snes.set_round_off_length(length);
+        let snes = new_snes(cx, model, (force_scale, choice.path), &rigid_modes)?;
         Ok(Linear {
+            force_scale,
             choice,
             pattern,
             rigid_modes,
@@ -190,6 +167,45 @@ impl Linear {
             },
         })
     }
+}
+
+/// Newton and its linear solver for the model: the tolerances (the absolute one scaled by
+/// `force_scale`), the linear solver `path`, the interface split (its bulk field with one set
+/// of the `rigid_modes`), a frozen Jacobian for a linear scene, and the round-off floor's
+/// length (*collective*).
+pub(super) fn new_snes(
+    cx: &Context,
+    model: &Model,
+    (force_scale, path): (f64, crate::petsc::LinearPath),
+    rigid_modes: &[Vec<f64>],
+) -> Result<Snes> {
+    let (scene, dofs) = (cx.scene, &cx.dofs);
+    let mut snes = Snes::new(
+        Tolerances {
+            atol: scene.newton.atol * force_scale,
+            rtol: scene.newton.rtol,
+            stol: 1e-14,
+            max_it: scene.newton.max_it,
+        },
+        &options_source(scene),
+        "basic",
+        path,
+    )?;
+    let owned = (dofs.owned_start, dofs.owned_count);
+    // The bulk field couples no two bodies: one set of six modes serves it.
+    let bulk_modes = crate::dofs::one_set_of_six(rigid_modes);
+    snes.split_interface(&linear::interface_dofs(model, dofs), owned, &bulk_modes)?;
+    if scene.is_linear() {
+        snes.freeze_jacobian()?;
+    }
+    let length = scene
+        .mesh
+        .coords
+        .iter()
+        .flatten()
+        .fold(0.0, |m: f64, c| m.max(c.abs()));
+    snes.set_round_off_length(length);
+    Ok(snes)
 }
 
 /// A matrix of the pattern's sparsity, with the rigid body modes of every body as its near null
