@@ -169,14 +169,12 @@ fn a_killed_run_on_the_iterative_path_restarts_to_the_same_files_bit_for_bit() {
     killed_and_restarted_match_the_run_never_stopped(1, "iterative");
 }
 
-/// A tied pair of blocks (Hex8, neo-Hookean), its top pressed and sheared over 40 steps, a
-/// checkpoint every 5: killed after step 12, restarted, the same files as the run never
-/// stopped (the tied multipliers carried by the checkpoint).
-#[test]
-fn a_killed_tied_run_restarts_to_the_same_files_bit_for_bit() {
-    let toml = common::stacked_blocks("hex8", [3, 3, 2], [4, 5, 2], "neo_hookean", 1000.0)
+/// A tied pair of blocks (Hex8, of `model`), its top pressed and sheared over `steps` steps.
+fn tied_blocks(model: &str, steps: usize) -> String {
+    common::stacked_blocks("hex8", [3, 3, 2], [4, 5, 2], model, 1000.0)
         + &common::symmetry(&[("low.zmin", "z"), ("low.xmin", "x"), ("low.ymin", "y")])
-        + r#"
+        + &format!(
+            r#"
 [[dirichlet]]
 set = "up.zmax"
 components = ["x", "z"]
@@ -187,10 +185,17 @@ kind = "tied"
 secondary = "low.zmax"
 primary = "up.zmin"
 [steps]
-count = 40
-[output]
-checkpoint_every = 5
-"#;
+count = {steps}
+"#
+        )
+}
+
+/// A tied pair of blocks (Hex8, neo-Hookean), its top pressed and sheared over 40 steps, a
+/// checkpoint every 5: killed after step 12, restarted, the same files as the run never
+/// stopped (the tied multipliers carried by the checkpoint).
+#[test]
+fn a_killed_tied_run_restarts_to_the_same_files_bit_for_bit() {
+    let toml = tied_blocks("neo_hookean", 40) + "[output]\ncheckpoint_every = 5\n";
     let case = common::write_case("restart_tied", &toml);
     let dir = case.parent().unwrap();
     let full = dir.join("full");
@@ -222,6 +227,29 @@ checkpoint_every = 5
         "{stdout}"
     );
     assert_same_outputs(&full, &killed);
+}
+
+/// A linear scene (linear elastic, tied) factorizes its constant tangent once and keeps it:
+/// after a checkpoint renews the matrix, it factorizes it again, and ends where the same run
+/// without checkpoints does.
+#[test]
+fn a_linear_scene_goes_on_after_its_checkpoints() {
+    let toml = tied_blocks("linear_elastic", 6);
+    let plain = common::write_case("restart_linear", &toml);
+    let with = plain.with_file_name("checkpoints.toml");
+    std::fs::write(&with, toml + "[output]\ncheckpoint_every = 2\n").unwrap();
+    let dir = plain.parent().unwrap();
+    let (a, b) = (dir.join("plain"), dir.join("checkpoints"));
+    for (case, out) in [(&plain, &a), (&with, &b)] {
+        let done = common::run_raw(case, 1, out, &["-q"]);
+        assert!(
+            done.status.success(),
+            "{}",
+            String::from_utf8_lossy(&done.stderr)
+        );
+    }
+    let diff = common::max_rel_difference_of_runs(&a, &b);
+    assert!(diff <= 1e-12, "{diff:e}");
 }
 
 /// Every file under `dir` with its bytes and modification time.

@@ -152,7 +152,9 @@ impl Pattern {
             let (n, len) = (usize::try_from(*n).ok()?, usize::try_from(*len).ok()?);
             let coupled = tail.get(..len)?;
             let row: Vec<usize> = coupled.iter().map(|&m| m as usize).collect();
-            if n >= nodes || row.iter().any(|&m| m >= nodes) {
+            let ascending = row.windows(2).all(|w| w[0] < w[1]);
+            let owned = n < nodes && dofs.node_owner[n] == dofs.rank;
+            if !owned || !ascending || row.last().is_some_and(|&m| m >= nodes) {
                 return None;
             }
             *rows.get_mut(n)? = row;

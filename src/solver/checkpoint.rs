@@ -50,7 +50,7 @@ use crate::petsc::LinearPath;
 
 use super::assembly::Pattern;
 use super::collective::agree_on;
-use super::predictor::NewtonTangent;
+use super::predictor::{NewtonTangent, Tangent};
 use super::setup::{new_matrix, new_snes};
 use super::Run;
 
@@ -103,6 +103,9 @@ impl Identity {
             ));
         }
         let digests = from.u64s("digests")?;
+        if digests.len() != self.digests.len() {
+            return Err(layout("digests"));
+        }
         let what = ["case file", "mesh", "PETSc options file"];
         for ((theirs, mine), what) in digests.iter().zip(self.digests).zip(what) {
             if *theirs != mine {
@@ -141,19 +144,18 @@ pub(super) fn open(
     world: &SimpleCommunicator,
 ) -> Result<Resumed> {
     let mine = open_mine(scene, dir, rank, ranks);
-    let agreed = agree_on(world, mine.as_ref().map(|_| ()).map_err(clone_message));
-    match (agreed, mine) {
-        (Ok(()), Ok(resumed)) => Ok(resumed),
-        (Err(Error::Output(m)), _) => Err(Error::Restart(
-            m.strip_prefix("restart: ").unwrap_or(&m).to_string(),
-        )),
-        (Err(e), _) => Err(e),
-        (Ok(()), Err(e)) => Err(e),
-    }
+    let failed = mine
+        .as_ref()
+        .err()
+        .map(|e| Error::Restart(restart_message(e)));
+    agree_on_restart(world, failed.map_or(Ok(()), Err))?;
+    mine
 }
 
-fn clone_message(e: &Error) -> Error {
-    Error::Other(e.to_string())
+/// The text of a refusal, without the `restart: ` every [`Error::Restart`] prints first.
+fn restart_message(e: &Error) -> String {
+    let text = e.to_string();
+    text.strip_prefix("restart: ").unwrap_or(&text).to_string()
 }
 
 fn open_mine(scene: &Scene, dir: &Path, rank: usize, ranks: usize) -> Result<Resumed> {
@@ -265,7 +267,15 @@ impl Run<'_> {
             // As after the pattern grew (`step`): a moving stencil may reach past it.
             l.jac.allow_new_nonzeros()?;
         }
-        l.tangent.newton = NewtonTangent::Other;
+        // A linear scene's tangent is assembled and factorized once, and then kept: again for
+        // the new matrix.
+        l.tangent = Tangent {
+            ready: false,
+            newton: NewtonTangent::Other,
+        };
+        if self.cx.scene.is_linear() {
+            l.snes.freeze_jacobian()?;
+        }
         Ok(())
     }
 
@@ -283,6 +293,7 @@ impl Run<'_> {
             c.unconverged,
             c.newton,
             c.cuts,
+            s.cuts_in_row,
         ];
         out.u64s("counts", &counts.map(|n| n as u64));
         let steps = &self.summary.steps;
@@ -312,16 +323,28 @@ impl Run<'_> {
     }
 
     /// Continues from `resumed`: the load path, the solution, the pattern and matrix, the
-    /// model's state, the summary's steps and the results' series (*collective*).
-    pub(super) fn resume(&mut self, mut resumed: Resumed) -> Result<()> {
+    /// model's state, the summary's steps and the results' series. Every rank reads its file
+    /// first, and only once all have does anything change on disk (*collective*).
+    pub(super) fn resume(&mut self, resumed: Resumed) -> Result<()> {
+        let read = self.read_checkpoint(resumed);
+        agree_on_restart(&self.cx.world, read)?;
+        self.as_a_restart_would_go_on()?;
+        self.results.rewrite_after_restart();
+        self.results.write_summary(&self.summary);
+        self.results.agree(&self.cx.world)
+    }
+
+    /// Reads the rest of this rank's file into the run (no collective call, nothing written).
+    fn read_checkpoint(&mut self, mut resumed: Resumed) -> Result<()> {
         let from = &mut resumed.reader;
         let (t, dt) = resumed.load;
         let counts = from.u64s("counts")?;
-        let &[step, capped, fallbacks, unconverged, newton, cuts] = &counts[..] else {
+        let &[step, capped, fallbacks, unconverged, newton, cuts, cuts_in_row] = &counts[..] else {
             return Err(layout("counts"));
         };
         let s = &mut self.state;
         (s.t, s.dt, s.step) = (t, dt, step as usize);
+        s.cuts_in_row = cuts_in_row as usize;
         let c = &mut s.counts;
         (c.uzawa_capped, c.fallbacks, c.fallbacks_before) =
             (capped as usize, fallbacks as usize, fallbacks as usize);
@@ -341,7 +364,6 @@ impl Run<'_> {
         let codes = from.u64s("pattern")?;
         self.linear.pattern =
             Pattern::from_codes(&self.cx.dofs, &codes).ok_or_else(|| layout("pattern"))?;
-        self.as_a_restart_would_go_on()?;
         self.model.read_state(from)?;
         self.results.read_state(from)?;
         if !from.at_end() {
@@ -350,6 +372,14 @@ impl Run<'_> {
         self.checkpointed = Some(resumed.step);
         Ok(())
     }
+}
+
+/// *Collective*: [`agree_on`] for a restart: the lowest failing rank's refusal on every rank.
+fn agree_on_restart(world: &SimpleCommunicator, mine: Result<()>) -> Result<()> {
+    agree_on(world, mine).map_err(|e| match e {
+        Error::Output(m) => Error::Restart(m.strip_prefix("restart: ").unwrap_or(&m).to_string()),
+        e => e,
+    })
 }
 
 fn step_records(from: &mut Reader) -> Result<Vec<StepRecord>> {

@@ -11,7 +11,7 @@ use crate::case::Scene;
 use crate::contact::frictional::ContactInterfaces;
 use crate::contact::tying::TiedInterfaces;
 use crate::dofs::DofMap;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::io::output::Summary;
 use crate::model::{Contribution, Model};
 use crate::petsc::log::Phases;
@@ -21,7 +21,6 @@ use crate::solid::Bulk;
 
 use super::assembly::Pattern;
 use super::checkpoint;
-use super::collective::agree_on;
 use super::evaluation::{Evaluation, Evaluator};
 use super::linear;
 use super::predictor::{NewtonTangent, Tangent};
@@ -93,14 +92,7 @@ impl<'a> Run<'a> {
             started,
         };
         if let Some(resumed) = resumed {
-            let resumed = run.resume(resumed);
-            let agreed = agree_on(&run.cx.world, resumed).map_err(|e| match e {
-                Error::Output(m) => Error::Restart(m),
-                e => e,
-            });
-            agreed?;
-            run.results.write_summary(&run.summary);
-            run.results.agree(&run.cx.world)?;
+            run.resume(resumed)?;
         }
         drop(setup_stage);
         run.phases.add("setup", run.started.elapsed().as_secs_f64());

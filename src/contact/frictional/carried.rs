@@ -46,6 +46,9 @@ impl ContactInterfaces {
 
     pub(super) fn read_carried(&mut self, from: &mut dyn StateSource) -> Result<()> {
         let x = from.f64s("contact positions")?;
+        if x.len() != 3 * self.x_old.len() {
+            return Err(mismatch("positions"));
+        }
         self.x_old = x.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
         let sums = from.f64s("contact force sums")?;
         let per_step = self.interfaces.len() * FORCE_SUMS;
@@ -61,6 +64,9 @@ impl ContactInterfaces {
             })
             .collect();
         self.step_changes = from.u64s("contact step changes")?;
+        if self.step_changes.len() > self.interfaces.len() {
+            return Err(mismatch("state changes"));
+        }
         for iface in &mut self.interfaces {
             iface.penalty_scale = one(from.f64s("contact penalty scale")?, "penalty scale")?;
             let counts = from.u64s("contact pair counts")?;
@@ -70,7 +76,12 @@ impl ContactInterfaces {
                 let values = from.f64s("contact node states")?;
                 let faces = from.u64s("contact node faces")?;
                 let n = pass.state.len();
-                if values.len() != NODE_VALUES * n || faces.len() != n {
+                let primary_faces = pass.pri_faces.len() as u64;
+                let face_fits = |&f: &u64| f == NO_SEGMENT || f < primary_faces;
+                if values.len() != NODE_VALUES * n
+                    || faces.len() != n
+                    || !faces.iter().all(face_fits)
+                {
                     return Err(mismatch("node states"));
                 }
                 for ((st, v), &face) in pass

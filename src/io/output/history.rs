@@ -96,10 +96,9 @@ impl History {
         &self.rows
     }
 
-    /// Replaces the rows (a restart: those of its checkpoint) and rewrites the file.
-    pub fn set_rows(&mut self, rows: Vec<Vec<f64>>) -> Result<()> {
+    /// Replaces the rows (a restart: those of its checkpoint), without writing the file.
+    pub fn restore_rows(&mut self, rows: Vec<Vec<f64>>) {
         self.rows = rows;
-        self.write()
     }
 
     /// The column names.

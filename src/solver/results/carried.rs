@@ -33,8 +33,8 @@ impl Results {
         }
     }
 
-    /// Reads back what [`Results::write_state`] wrote (rank 0), rewrites the history and the
-    /// series, and removes every step file they do not list.
+    /// Reads back what [`Results::write_state`] wrote (rank 0), into memory:
+    /// [`Results::rewrite_after_restart`] writes it.
     pub fn read_state(&mut self, from: &mut Reader) -> Result<()> {
         let Some(history) = &mut self.history else {
             return Ok(());
@@ -47,7 +47,7 @@ impl Results {
             ));
         }
         let rows = values.chunks_exact(columns).map(<[f64]>::to_vec).collect();
-        history.set_rows(rows)?;
+        history.restore_rows(rows);
         let stems = from.text("series")?;
         for stem in stems.split('\n') {
             let times = from.f64s("series times")?;
@@ -60,15 +60,31 @@ impl Results {
                 return Err(Error::Restart("the checkpoint's series are damaged".into()));
             }
             let entries: Vec<(f64, String)> = times.into_iter().zip(files).collect();
+            let own = |f: &str| !f.contains("..") && !f.starts_with('/');
+            if !own(stem) || entries.iter().any(|(_, f)| !own(f)) {
+                return Err(Error::Restart("the checkpoint's series are damaged".into()));
+            }
             if stem.is_empty() {
                 self.pvd = entries;
             } else {
                 self.interface_pvd.insert(stem.to_string(), entries);
             }
         }
-        let kept = self.listed_files();
-        remove_step_files(&self.dir, &self.case, &kept)?;
-        self.rewrite_series()
+        Ok(())
+    }
+
+    /// After [`Results::read_state`] on every rank (rank 0): removes every step file the series
+    /// do not list, and rewrites the history and the series (a failure is kept for
+    /// [`Results::agree`]).
+    pub fn rewrite_after_restart(&mut self) {
+        let Some(history) = &self.history else {
+            return;
+        };
+        let written = history
+            .write()
+            .and_then(|()| remove_step_files(&self.dir, &self.case, &self.listed_files()))
+            .and_then(|()| self.rewrite_series());
+        self.keep(written);
     }
 
     /// Every series file and step file the series list: the PVDs, the PVTU of each volume
