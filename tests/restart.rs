@@ -63,6 +63,24 @@ fn outputs(dir: &Path) -> BTreeMap<String, String> {
     files
 }
 
+/// Restarts `case` on `ranks` with `args` into `killed`, which must say it went on from the
+/// checkpoint of `step` and end with the files of `full`.
+fn restarted_matches(
+    case: &Path,
+    (ranks, args): (usize, &[&str]),
+    killed: &Path,
+    full: &Path,
+    step: usize,
+) {
+    let out = common::run_raw(case, ranks, killed, args);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stdout}\n{stderr}");
+    let said = format!("restarted from the checkpoint of step {step} (");
+    assert!(stdout.contains(&said), "{stdout}");
+    assert_same_outputs(full, killed);
+}
+
 /// The runs in `full` and `restarted` left the same files with the same contents ([`outputs`]).
 fn assert_same_outputs(full: &Path, restarted: &Path) {
     let (want, got) = (outputs(full), outputs(restarted));
@@ -137,18 +155,7 @@ fn killed_and_restarted_match_the_run_never_stopped(ranks: usize, linear_solver:
     let mut restart = args(ranks).to_vec();
     let killed_text = killed.display().to_string();
     restart.extend(["--restart", &killed_text]);
-    let out = common::run_raw(&case, ranks, &killed, &restart);
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{stdout}\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    assert!(
-        stdout.contains("restarted from the checkpoint of step 6 ("),
-        "{stdout}"
-    );
-    assert_same_outputs(&full, &killed);
+    restarted_matches(&case, (ranks, &restart), &killed, &full, 6);
 }
 
 #[test]
@@ -215,18 +222,7 @@ fn a_killed_tied_run_restarts_to_the_same_files_bit_for_bit() {
     let out = started.finish();
     assert!(!out.status.success(), "the kill came after the end");
     let killed_text = killed.display().to_string();
-    let out = common::run_raw(&case, 1, &killed, &["--restart", &killed_text]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        stdout.contains("restarted from the checkpoint of step 10 ("),
-        "{stdout}"
-    );
-    assert_same_outputs(&full, &killed);
+    restarted_matches(&case, (1, &["--restart", &killed_text]), &killed, &full, 10);
 }
 
 /// A linear scene (linear elastic, tied) factorizes its constant tangent once and keeps it:

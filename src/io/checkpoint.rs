@@ -232,21 +232,21 @@ impl Reader {
     }
 }
 
+impl Reader {
+    /// The next record, `name` of `kind`, as eight-byte words.
+    fn words(&mut self, kind: u8, name: &str) -> Result<impl Iterator<Item = [u8; 8]> + '_> {
+        let raw = self.record(kind, name, 8)?;
+        Ok(raw.chunks_exact(8).map(|c| c.try_into().expect("8 bytes")))
+    }
+}
+
 impl StateSource for Reader {
     fn f64s(&mut self, name: &str) -> Result<Vec<f64>> {
-        let raw = self.record(F64S, name, 8)?;
-        Ok(raw
-            .chunks_exact(8)
-            .map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes")))
-            .collect())
+        Ok(self.words(F64S, name)?.map(f64::from_le_bytes).collect())
     }
 
     fn u64s(&mut self, name: &str) -> Result<Vec<u64>> {
-        let raw = self.record(U64S, name, 8)?;
-        Ok(raw
-            .chunks_exact(8)
-            .map(|c| u64::from_le_bytes(c.try_into().expect("8 bytes")))
-            .collect())
+        Ok(self.words(U64S, name)?.map(u64::from_le_bytes).collect())
     }
 }
 

@@ -66,7 +66,7 @@ fn file_name(step: usize, rank: usize) -> String {
 }
 
 /// What ties a checkpoint to the run that may continue it.
-struct Identity {
+pub(super) struct Identity {
     version: String,
     /// Digests of the case file as read, the mesh and the PETSc options file.
     digests: [u64; 3],
@@ -282,7 +282,9 @@ impl Run<'_> {
     /// This rank's checkpoint file (module docs), in the order [`Run::resume`] reads it.
     fn checkpoint_bytes(&self) -> Result<Vec<u8>> {
         let mut out = Writer::default();
-        Identity::of(self.cx.scene, self.cx.ranks).write(self.cx.rank, &mut out);
+        let (scene, ranks) = (self.cx.scene, self.cx.ranks);
+        let identity = self.identity.get_or_init(|| Identity::of(scene, ranks));
+        identity.write(self.cx.rank, &mut out);
         let s = &self.state;
         out.f64s("load", &[s.t, s.dt]);
         let c = &s.counts;

@@ -168,6 +168,8 @@ struct Run<'a> {
     contact_monitor: bool,
     /// The step of the last checkpoint written or restarted from.
     checkpointed: Option<usize>,
+    /// What ties this run's checkpoints to it (the mesh's digest is made once).
+    identity: std::cell::OnceCell<checkpoint::Identity>,
     started: Instant,
 }
 

@@ -89,6 +89,7 @@ impl<'a> Run<'a> {
             fallback_line_search,
             contact_monitor: options::has(CONTACT_MONITOR)?,
             checkpointed: None,
+            identity: Default::default(),
             started,
         };
         if let Some(resumed) = resumed {

@@ -33,12 +33,12 @@ impl ContactInterfaces {
         let mut result = Augmented::Converged;
         let mut worst = 0.0f64;
         for i in 0..self.interfaces.len() {
+            // (Only a sticking node's slip is measured against the motion.)
             let mut motion = 0.0;
-            world.all_reduce_into(
-                &self.interface_motion(at, i),
-                &mut motion,
-                SystemOperation::max(),
-            );
+            if self.interfaces[i].mu > 0.0 {
+                let mine = self.interface_motion(at, i);
+                world.all_reduce_into(&mine, &mut motion, SystemOperation::max());
+            }
             let updates = self.uzawa_updates(at, i, motion);
             let local = updates.iter().map(|u| u.2).fold(0.0, f64::max);
             let mut violation = 0.0;
