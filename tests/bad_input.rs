@@ -543,6 +543,16 @@ fn interface_rows() -> Vec<Row> {
             "interface[0].uzawa_slip_motion: only for kind = \"contact\"",
         ),
         check(
+            "contact_unknown_uzawa_relaxation",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\nuzawa_relaxation = \"anderson\"\n"),
+            "interface[0].uzawa_relaxation = \"anderson\": must be \"aitken\" or \"none\"",
+        ),
+        check(
+            "uzawa_relaxation_on_tied_interface",
+            valid_plus("[[interface]]\nname = \"i\"\nkind = \"tied\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\nuzawa_relaxation = \"none\"\n"),
+            "interface[0].uzawa_relaxation: only for kind = \"contact\"",
+        ),
+        check(
             "contact_unknown_method",
             valid_plus("[[interface]]\nname = \"i\"\nkind = \"contact\"\nsecondary = \"b.zmax\"\nprimary = \"b.zmin\"\nmethod = \"nts\"\n"),
             "interface[0].method",

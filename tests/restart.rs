@@ -14,14 +14,17 @@ use std::process::Output;
 /// round-off already. SuperLU_DIST's is, so the 2-rank comparison uses it.
 const REPRODUCIBLE_ON_RANKS: &[&str] = &["-pc_factor_mat_solver_type", "superlu_dist"];
 
+/// Steps between checkpoints of the slide.
+const CHECKPOINT_EVERY: usize = 6;
+
 /// A frictional slide (Hex8, mu 0.3) whose steps are cut (newton.max_it = 4) and augmented
-/// (Uzawa) around the kill, with a checkpoint every 6 steps.
+/// (Uzawa) around the kill, with a checkpoint every [`CHECKPOINT_EVERY`] steps.
 fn case(name: &str, linear_solver: &str) -> PathBuf {
     let toml = common::slide_case(10)
         .replace("[3, 2, 1]", "[9, 6, 2]")
         .replace("[2, 2, 1]", "[6, 6, 2]")
         + &format!("[newton]\nmax_it = 4\nlinear_solver = \"{linear_solver}\"\n")
-        + "[output]\ncheckpoint_every = 6\n";
+        + &format!("[output]\ncheckpoint_every = {CHECKPOINT_EVERY}\n");
     common::write_case(name, &toml)
 }
 
@@ -109,13 +112,34 @@ fn without_timings(csv: &str) -> String {
 }
 
 /// Runs the case into `out` and SIGKILLs it (rank 0 under mpirun, which then ends the job) in
-/// the middle of step 8, which the slide cuts: in the attempt that follows the first progress
-/// line of step 8 (its cut).
-fn run_and_kill(case: &Path, ranks: usize, out: &Path) -> Output {
+/// the middle of step `step`, which the slide cuts: in the attempt that follows the first
+/// progress line of that step (its cut).
+fn run_and_kill(case: &Path, ranks: usize, out: &Path, step: usize) -> Output {
     let run = common::subcommand("run", case, ranks, out, args(ranks));
-    let started = common::start_until(run, "  step 8 ");
+    let started = common::start_until(run, &format!("  step {step} "));
     started.signal(0, "KILL");
     started.finish()
+}
+
+/// The first checkpoint of the run in `full` after which the slide augments the next step
+/// without a cut and then augments and cuts the step after: the steps redone after the
+/// restart are augmented, the one killed is cut, and the first is not, so that its predictor
+/// would reuse the factorization of the step before (module docs of `solver::checkpoint`).
+fn checkpoint_before_a_cut(full: &Path) -> usize {
+    let history = common::History::read(full);
+    let (cuts, augmentations) = (history.column("cuts"), history.column("augmentations"));
+    let rows = history.rows();
+    (CHECKPOINT_EVERY..rows.len() - 1)
+        .step_by(CHECKPOINT_EVERY)
+        .find(|&c| {
+            // rows[c] is step c + 1.
+            let (first, killed) = (&rows[c], &rows[c + 1]);
+            first[augmentations] > 0.0
+                && first[cuts] == 0.0
+                && killed[augmentations] > 0.0
+                && killed[cuts] > 0.0
+        })
+        .unwrap_or_else(|| panic!("no checkpoint before an augmented step and a cut one: {rows:?}"))
 }
 
 fn killed_and_restarted_match_the_run_never_stopped(ranks: usize, linear_solver: &str) {
@@ -128,34 +152,24 @@ fn killed_and_restarted_match_the_run_never_stopped(ranks: usize, linear_solver:
         "{}",
         String::from_utf8_lossy(&done.stderr)
     );
-    // The steps redone after the checkpoint of step 6 are augmented, the one killed is cut,
-    // and the first is not: its predictor would reuse the factorization of the step before
-    // (module docs of `solver::checkpoint`).
-    let history = common::History::read(&full);
-    let (cuts, augmentations) = (history.column("cuts"), history.column("augmentations"));
-    let (seventh, eighth) = (&history.rows()[6], &history.rows()[7]);
-    assert!(
-        seventh[augmentations] > 0.0 && seventh[cuts] == 0.0,
-        "{seventh:?}"
-    );
-    assert!(
-        eighth[augmentations] > 0.0 && eighth[cuts] > 0.0,
-        "{eighth:?}"
-    );
+    let checkpoint = checkpoint_before_a_cut(&full);
     let killed = dir.join("killed");
-    let out = run_and_kill(&case, ranks, &killed);
+    let out = run_and_kill(&case, ranks, &killed, checkpoint + 2);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
         !out.status.success(),
         "the kill came after the end:\n{stdout}"
     );
     let latest = std::fs::read_to_string(killed.join("checkpoint/latest")).unwrap();
-    assert_eq!(latest, format!("step 6\nranks {ranks}\n"));
-    assert!(common::History::read(&killed).rows().len() == 7, "{stdout}");
+    assert_eq!(latest, format!("step {checkpoint}\nranks {ranks}\n"));
+    assert!(
+        common::History::read(&killed).rows().len() == checkpoint + 1,
+        "{stdout}"
+    );
     let mut restart = args(ranks).to_vec();
     let killed_text = killed.display().to_string();
     restart.extend(["--restart", &killed_text]);
-    restarted_matches(&case, (ranks, &restart), &killed, &full, 6);
+    restarted_matches(&case, (ranks, &restart), &killed, &full, checkpoint);
 }
 
 #[test]

@@ -10,7 +10,7 @@ use super::checks::{
     first_given, given, MAX_FRICTIONAL_CONTACT_PENALTY, MAX_FRICTIONLESS_CONTACT_PENALTY,
     MAX_UZAWA, PENALTY_RANGE,
 };
-use super::{ContactMethod, Interface, InterfaceKind};
+use super::{ContactMethod, Interface, InterfaceKind, UzawaRelaxation};
 
 /// Default tangential penalty factor of contact interfaces (see the case key
 /// `tangential_penalty`): sticking about as stiff as the element layer under the node, so that
@@ -21,7 +21,7 @@ const DEFAULT_TANGENTIAL_PENALTY: f64 = 1.0;
 const DEFAULT_UZAWA_SLIP_TOL: f64 = 1e-6;
 
 /// The default `uzawa_slip_motion` (see `uzawa_slip_tol` and docs/performance.md).
-const DEFAULT_UZAWA_SLIP_MOTION: f64 = 1e-1;
+const DEFAULT_UZAWA_SLIP_MOTION: f64 = 3e-2;
 
 /// Every interface, with names unique among them.
 pub(super) fn build_interfaces(
@@ -96,7 +96,7 @@ fn build_interface(spec: &InterfaceSpec, key: &str, mesh: &Mesh) -> Result<Inter
             format!("{key}.pallets = \"{name}\": must be \"centroid\" or \"fan\"")
         })?,
     };
-    let friction = Friction::check(spec, key, penalty)?;
+    let friction = Friction::check(spec, key, penalty, method)?;
     let uzawa_max = spec.uzawa_max.unwrap_or(match (kind, spec.passes) {
         (_, 2) => 0,
         (InterfaceKind::Contact, _) => 10,
@@ -126,6 +126,7 @@ fn build_interface(spec: &InterfaceSpec, key: &str, mesh: &Mesh) -> Result<Inter
         tangential_penalty: friction.tangential_penalty,
         uzawa_slip_tol: friction.uzawa_slip_tol,
         uzawa_slip_motion: friction.uzawa_slip_motion,
+        uzawa_relaxation: friction.uzawa_relaxation,
         penalty_growth: friction.penalty_growth,
         penalty_growth_cap: friction.penalty_growth_cap,
     })
@@ -144,7 +145,7 @@ fn kind(spec: &InterfaceSpec, key: &str) -> Result<InterfaceKind, String> {
     };
     if kind == InterfaceKind::Tied {
         let contact_only = given!(spec; friction, tangential_penalty, uzawa_slip_tol,
-            uzawa_slip_motion, method,
+            uzawa_slip_motion, uzawa_relaxation, method,
             penalty_growth, penalty_growth_cap);
         if let Some(k) = first_given(&contact_only) {
             return Err(format!("{key}.{k}: only for kind = \"contact\""));
@@ -209,15 +210,22 @@ struct Friction {
     tangential_penalty: f64,
     uzawa_slip_tol: f64,
     uzawa_slip_motion: f64,
+    uzawa_relaxation: UzawaRelaxation,
     penalty_growth: f64,
     penalty_growth_cap: f64,
 }
 
 impl Friction {
-    /// The friction coefficient, the tangential penalty and slip tolerance, and the penalty
-    /// growth whose cap keeps both grown penalties (`penalty`, the normal one) within
-    /// [`PENALTY_RANGE`].
-    fn check(spec: &InterfaceSpec, key: &str, penalty: f64) -> Result<Friction, String> {
+    /// The friction coefficient, the tangential penalty and slip tolerance, the relaxation of
+    /// the sticking nodes' updates (by default Aitken's for mortar, plain for `method`
+    /// node-on-segment), and the penalty growth whose cap keeps both grown penalties
+    /// (`penalty`, the normal one) within [`PENALTY_RANGE`].
+    fn check(
+        spec: &InterfaceSpec,
+        key: &str,
+        penalty: f64,
+        method: ContactMethod,
+    ) -> Result<Friction, String> {
         let coefficient = spec.friction.unwrap_or(0.0);
         if !(coefficient >= 0.0 && coefficient.is_finite()) {
             return Err(format!(
@@ -237,6 +245,16 @@ impl Friction {
             &format!("{key}.uzawa_slip_motion"),
             spec.uzawa_slip_motion.unwrap_or(DEFAULT_UZAWA_SLIP_MOTION),
         )?;
+        let uzawa_relaxation = match spec.uzawa_relaxation.as_deref() {
+            None if method == ContactMethod::NodeOnSegment => UzawaRelaxation::Plain,
+            None | Some("aitken") => UzawaRelaxation::Aitken,
+            Some("none") => UzawaRelaxation::Plain,
+            Some(r) => {
+                return Err(format!(
+                    "{key}.uzawa_relaxation = \"{r}\": must be \"aitken\" or \"none\""
+                ))
+            }
+        };
         let penalty_growth = spec.penalty_growth.unwrap_or(1.0);
         if !(penalty_growth >= 1.0 && penalty_growth.is_finite()) {
             return Err(format!(
@@ -270,6 +288,7 @@ impl Friction {
             tangential_penalty,
             uzawa_slip_tol,
             uzawa_slip_motion,
+            uzawa_relaxation,
             penalty_growth,
             penalty_growth_cap,
         })

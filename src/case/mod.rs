@@ -24,7 +24,7 @@ use std::path::{Path, PathBuf};
 
 pub use scene::{
     BodyForce, Constraint, ContactMethod, Interface, InterfaceKind, LoadCurve, PressureLoad,
-    Rotation, Scene, Verification,
+    Rotation, Scene, UzawaRelaxation, Verification,
 };
 
 use crate::error::{Error, Result};

@@ -128,6 +128,16 @@ pub enum InterfaceKind {
     Contact,
 }
 
+/// How the Uzawa updates of a contact interface's sticking nodes are relaxed
+/// (`contact::frictional::relaxation`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum UzawaRelaxation {
+    /// Aitken's factor from the last two updates, while the interface sticks whole.
+    Aitken,
+    /// The plain update.
+    Plain,
+}
+
 /// How a contact interface measures gap and slip.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ContactMethod {
@@ -180,6 +190,8 @@ pub struct Interface {
     /// Contact: Uzawa tolerance on the slip of sticking nodes, as a fraction of the step's
     /// tangential motion of the node (the larger of the two tolerances holds).
     pub uzawa_slip_motion: f64,
+    /// Contact: how the Uzawa updates of sticking nodes are relaxed.
+    pub uzawa_relaxation: UzawaRelaxation,
     /// Contact: penalty growth factor (1 = off) and cap (multiple of the initial penalties).
     pub penalty_growth: f64,
     pub penalty_growth_cap: f64,

@@ -322,17 +322,21 @@ pub struct InterfaceSpec {
     /// Contact with friction: augmentations also go on while the slip |dsh_A| of a sticking
     /// node is above this fraction of h_A and above `uzawa_slip_motion` times the interface's
     /// motion: a floor, for an interface that hardly moves. Default 1e-6, chosen with
-    /// `cases/stick_phase/study.toml` (docs/performance.md). With the default tangential
-    /// penalty a plain Uzawa update removes only part of a sticking node's slip, so much
-    /// tighter tolerances exceed any sensible `uzawa_max`.
+    /// `cases/stick_phase/study.toml` (docs/performance.md).
     pub uzawa_slip_tol: Option<f64>,
     /// Contact with friction: a sticking node's slip may be up to this fraction of the
     /// interface's tangential motion over the step (the largest tangential displacement of its
     /// pressed traction nodes since the last step; the larger of this and `uzawa_slip_tol`
     /// holds), so that the slip a penalty leaves stays small against the motion that loads the
-    /// interface, whatever the motion's size against the mesh. Default 1e-1, chosen with
+    /// interface, whatever the motion's size against the mesh. Default 3e-2, chosen with
     /// `cases/stick_phase/study.toml` (docs/performance.md).
     pub uzawa_slip_motion: Option<f64>,
+    /// Contact with friction: how the Uzawa updates of sticking nodes are relaxed: "aitken"
+    /// (each update scaled by Aitken's factor from the last two, while the interface sticks
+    /// whole and no node changed state; the default for mortar contact) or "none" (the plain
+    /// update; the default for node-on-segment, whose Figure 7 baseline it keeps as measured).
+    /// See docs/theory.md section 4 and docs/performance.md.
+    pub uzawa_relaxation: Option<String>,
     /// At most this many augmentations per load step (0: plain penalty). Default 0 for two
     /// passes: on dissimilar meshes the two passes' weak conditions cannot both hold exactly,
     /// so augmenting them drives a tied interface into locking and never meets a contact

@@ -4,12 +4,14 @@
 use mpi::collective::{CommunicatorCollectives, SystemOperation};
 use mpi::topology::SimpleCommunicator;
 
+use crate::case::UzawaRelaxation;
 use crate::contact::law::{uzawa_update, NodeHistory};
 use crate::model::{Augmented, State};
 use crate::vec3::norm;
 
 use super::coverage::{coverage_scale, FADE_COVERAGE};
 use super::pass::NodeState;
+use super::relaxation::{relaxed, NodeUpdate};
 use super::ContactInterfaces;
 
 /// A state saved before a step, to restore when the step is cut.
@@ -40,7 +42,7 @@ impl ContactInterfaces {
                 world.all_reduce_into(&mine, &mut motion, SystemOperation::max());
             }
             let updates = self.uzawa_updates(at, i, motion);
-            let local = updates.iter().map(|u| u.2).fold(0.0, f64::max);
+            let local = updates.iter().map(|u| u.violation).fold(0.0, f64::max);
             let mut violation = 0.0;
             world.all_reduce_into(&local, &mut violation, SystemOperation::max());
             worst = worst.max(violation);
@@ -52,8 +54,16 @@ impl ContactInterfaces {
                 result = result.and(Augmented::CapReached);
                 continue;
             }
-            for (p, a, _, h) in updates {
-                iface.passes[p].state[a].history = h;
+            // (A frictionless interface has no sticking node to relax.)
+            let mut omega = 1.0;
+            if iface.mu > 0.0 && iface.uzawa_relaxation == UzawaRelaxation::Aitken {
+                let old = |p: usize, a: usize| iface.passes[p].state[a].history;
+                omega = iface.relaxation.factor(&updates, old, world);
+                iface.relaxation.remember(omega, &updates, old);
+            }
+            for u in &updates {
+                let st = &mut iface.passes[u.pass].state[u.node];
+                st.history = relaxed(&st.history, u, omega, iface.mu);
             }
             if violation > 0.25 * iface.last_violation && iface.penalty_growth > 1.0 {
                 iface.penalty_scale =
@@ -65,17 +75,12 @@ impl ContactInterfaces {
         (result, worst)
     }
 
-    /// The Uzawa update of every held node of interface `i`: `(pass, node, violation as a
-    /// multiple of its tolerance, new history)`. A sticking node's slip is measured against
-    /// the larger of `uzawa_slip_tol h_A` and `uzawa_slip_motion` times `motion`, the
-    /// interface's tangential motion over the step ([`ContactInterfaces::interface_motion`],
+    /// The plain Uzawa update of every held node of interface `i` (module `relaxation`: what
+    /// the sticking nodes take). A sticking node's slip is measured against the larger of
+    /// `uzawa_slip_tol h_A` and `uzawa_slip_motion` times `motion`, the interface's
+    /// tangential motion over the step ([`ContactInterfaces::interface_motion`],
     /// over every rank).
-    pub(crate) fn uzawa_updates(
-        &self,
-        at: &State,
-        i: usize,
-        motion: f64,
-    ) -> Vec<(usize, usize, f64, NodeHistory)> {
+    pub(crate) fn uzawa_updates(&self, at: &State, i: usize, motion: f64) -> Vec<NodeUpdate> {
         let iface = &self.interfaces[i];
         let mut out = Vec::new();
         for (p, pass) in iface.passes.iter().enumerate() {
@@ -118,8 +123,13 @@ impl ContactInterfaces {
                 } else {
                     0.0
                 };
-                let violation = (dn / iface.uzawa_tol / st.h).max(dt);
-                out.push((p, a, violation, new));
+                out.push(NodeUpdate {
+                    pass: p,
+                    node: a,
+                    violation: (dn / iface.uzawa_tol / st.h).max(dt),
+                    history: new,
+                    status: if iface.mu > 0.0 { f.status } else { 0 },
+                });
             }
         }
         out
@@ -184,6 +194,7 @@ impl ContactInterfaces {
                 }
             }
             self.interfaces[i].last_violation = f64::INFINITY;
+            self.interfaces[i].relaxation.reset();
         }
         self.x_old = at.positions();
     }
@@ -213,6 +224,7 @@ impl ContactInterfaces {
             }
             iface.penalty_scale = scale;
             iface.last_violation = f64::INFINITY;
+            iface.relaxation.reset();
         }
     }
 }

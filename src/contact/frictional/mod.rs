@@ -121,9 +121,11 @@
 //! while a penetration is above `uzawa_tol` (relative to `h_A`) or a slip above the larger of
 //! `uzawa_slip_motion` times the interface's tangential motion over the step
 //! ([`ContactInterfaces::interface_motion`]) and `uzawa_slip_tol h_A` (docs/theory.md section
-//! 4), at most `uzawa_max` times per step. With
-//! `penalty_growth > 1`, an augmentation that did not bring the violation below a quarter of the
-//! previous one multiplies both penalties by that factor, up to `penalty_growth_cap`.
+//! 4), at most `uzawa_max` times per step. The tangential updates of sticking nodes are scaled
+//! by Aitken's factor while the interface sticks whole (module `relaxation`, the case key
+//! `uzawa_relaxation`). With `penalty_growth > 1`, an augmentation that did not bring the
+//! violation below a quarter of the previous one multiplies both penalties by that factor, up
+//! to `penalty_growth_cap`.
 //!
 //! # Stick predictor
 //!
@@ -186,6 +188,7 @@ mod lifecycle;
 mod metrics;
 mod pass;
 mod pattern;
+mod relaxation;
 mod tangent;
 #[cfg(test)]
 pub(crate) mod tests;
@@ -194,7 +197,7 @@ use std::cell::{Cell, RefCell};
 
 use mpi::topology::SimpleCommunicator;
 
-use crate::case::{InterfaceKind, Scene};
+use crate::case::{InterfaceKind, Scene, UzawaRelaxation};
 use crate::contact::block_sum::BlockSum;
 use crate::contact::mortar::{PalletSplit, RejectStats, TractionScheme};
 use crate::dofs::DofMap;
@@ -215,6 +218,7 @@ pub(crate) use tangent::NodeBlock;
 
 use deal::pass_ranks;
 use lifecycle::Saved;
+use relaxation::Relaxation;
 
 /// Number of figures of [`ContactInterfaces::force_sums`] per interface.
 pub const FORCE_SUMS: usize = 9;
@@ -256,6 +260,8 @@ pub struct ContactInterface {
     /// Uzawa tolerance on the slip of sticking nodes (fraction of the node's tangential motion
     /// over the step).
     pub uzawa_slip_motion: f64,
+    /// How the tangential updates of sticking nodes are relaxed.
+    pub uzawa_relaxation: UzawaRelaxation,
     pub uzawa_max: usize,
     penalty_growth: f64,
     penalty_growth_cap: f64,
@@ -263,6 +269,8 @@ pub struct ContactInterface {
     pub penalty_scale: f64,
     /// Violation after the previous augmentation of this step (for the penalty growth).
     last_violation: f64,
+    /// The relaxation of the tangential updates over this step's augmentations.
+    relaxation: Relaxation,
     quadrature_degree: Option<usize>,
     pallets: PalletSplit,
     pub passes: Vec<ContactPass>,
@@ -345,11 +353,13 @@ impl ContactInterfaces {
                 uzawa_tol: iface.uzawa_tol,
                 uzawa_slip_tol: iface.uzawa_slip_tol,
                 uzawa_slip_motion: iface.uzawa_slip_motion,
+                uzawa_relaxation: iface.uzawa_relaxation,
                 uzawa_max: iface.uzawa_max,
                 penalty_growth: iface.penalty_growth,
                 penalty_growth_cap: iface.penalty_growth_cap,
                 penalty_scale: 1.0,
                 last_violation: f64::INFINITY,
+                relaxation: Relaxation::default(),
                 quadrature_degree: iface.quadrature_degree,
                 pallets: iface.pallets,
                 passes,

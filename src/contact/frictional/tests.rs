@@ -114,12 +114,13 @@ fn uzawa_skips_fading_nodes_and_releases_nodes_without_traction() {
     // Nodes without traction, fading, partly covered, wholly covered.
     let mut counts = [0; 4];
     for (a, f) in &fields {
-        let update = updates.iter().find(|(p, b, ..)| *p == 0 && b == a);
+        let update = updates.iter().find(|u| u.pass == 0 && u.node == *a);
         let coverage = f.area / f.full_area;
         if f.area == 0.0 {
             counts[0] += 1;
-            let (_, _, violation, new) = update.expect("a node without traction is released");
-            assert_eq!(*violation, 0.0, "node {a}: a release is no violation");
+            let update = update.expect("a node without traction is released");
+            let (violation, new) = (update.violation, update.history);
+            assert_eq!(violation, 0.0, "node {a}: a release is no violation");
             assert_eq!((new.lambda_n, new.lambda_t), (0.0, [0.0; 3]), "node {a}");
             continue;
         }
@@ -132,9 +133,10 @@ fn uzawa_skips_fading_nodes_and_releases_nodes_without_traction() {
             continue;
         }
         counts[if coverage < 1.0 - 1e-9 { 2 } else { 3 }] += 1;
-        let (_, _, violation, new) = update.expect("a covered node is updated");
+        let update = update.expect("a covered node is updated");
+        let (violation, new) = (update.violation, update.history);
         assert!(f.gap > 0.0, "node {a}: gap {}", f.gap);
-        assert!(*violation > 1.0, "node {a}: violation {violation}");
+        assert!(violation > 1.0, "node {a}: violation {violation}");
         assert!(
             new.lambda_n > LAMBDA_N,
             "node {a}: lambda_n {}",

@@ -1,0 +1,246 @@
+//! Aitken's relaxation of the tangential Uzawa updates of sticking nodes (docs/theory.md
+//! section 4).
+//!
+//! # Why
+//!
+//! A sticking node's plain Uzawa update adds `r_A = eps_T dsh_A` (its elastic slip over the
+//! step, times the tangential penalty) to its tangential multiplier. The next solve removes only
+//! part of that slip: for one node held by a structure of stiffness `k`, the slip after update
+//! `k` is
+//!
+//! ```text
+//! s_k = (k / (k + eps_T))^k s_0,
+//! ```
+//!
+//! a factor about 0.9 per augmentation with the default `eps_T = E / h_A`, whose stiffness a
+//! block much larger than `h_A` exceeds several times. Over a whole interface the factor is
+//! that of the interface's stiffest mode of tangential motion.
+//!
+//! # The update
+//!
+//! The Uzawa loop is a fixed-point iteration `lambda <- lambda + r(lambda)` on the multipliers;
+//! Aitken's delta-squared method (the dynamic relaxation of partitioned fluid-structure
+//! coupling) scales each update by a factor taken from the last two:
+//!
+//! ```text
+//! omega_k = -omega_{k-1} (r_{k-1} . (r_k - r_{k-1})) / |r_k - r_{k-1}|^2
+//! lambda_T <- lambda_T + omega_k r_k
+//! ```
+//!
+//! with the dot products summed over the sticking nodes of the interface (over every rank) that
+//! stuck in both augmentations. For one node (or one dominant mode) `r_k = (1 - c omega_{k-1})
+//! r_{k-1}` with `c = eps_T / (k + eps_T)`, and the formula gives `omega_k = 1 / c`: the update
+//! that removes the slip in one step. The first augmentation of a step takes `omega = 1`, and
+//! `omega` is kept within `[1, MAX_RELAXATION]` (below 1 the plain update, which converges, is the
+//! better one; the cap bounds the step where the two updates are nearly equal).
+//!
+//! Only the tangential multiplier of a sticking node is relaxed: the normal multiplier and a
+//! slipping node (whose traction the return map sets to `mu p`) take the plain update. A relaxed
+//! multiplier whose carried traction `|t_old + lambda_T|` would reach the Coulomb cone of the
+//! updated pressure takes the plain update too, so that relaxation never turns a stick into a
+//! slip by itself.
+
+use std::collections::HashMap;
+
+use mpi::collective::{CommunicatorCollectives, SystemOperation};
+use mpi::topology::SimpleCommunicator;
+
+use crate::contact::law::{NodeHistory, CONE_TIE};
+use crate::vec3::norm;
+
+/// The largest relaxation factor.
+pub(crate) const MAX_RELAXATION: f64 = 10.0;
+
+/// One node's Uzawa update: `(pass, node)`, its violation as a multiple of its tolerance, the
+/// plain update and the node's state under the law (`fields::status_code`: 0 open, 1 stick,
+/// 2 slip; 0 without friction).
+#[derive(Clone, Debug)]
+pub(crate) struct NodeUpdate {
+    pub(crate) pass: usize,
+    pub(crate) node: usize,
+    pub(crate) violation: f64,
+    pub(crate) history: NodeHistory,
+    pub(crate) status: u8,
+}
+
+impl NodeUpdate {
+    fn sticks(&self) -> bool {
+        self.status == 1
+    }
+}
+
+/// The relaxation of one interface over the augmentations of the step under way.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Relaxation {
+    /// The factor of the last augmentation of the step; 0 before the first.
+    omega: f64,
+    /// The plain tangential update `r` of every node that stuck in the last augmentation,
+    /// by `(pass, node)`.
+    previous: HashMap<(usize, usize), [f64; 3]>,
+}
+
+impl Relaxation {
+    /// Forgets the step's augmentations (a new step, or a cut one).
+    pub(crate) fn reset(&mut self) {
+        self.omega = 0.0;
+        self.previous.clear();
+    }
+
+    /// The factor of this augmentation, from the plain `updates` of the interface's nodes on
+    /// this rank and the multipliers they were computed with, `old(pass, node)`
+    /// (*collective*: sums over every rank).
+    pub(crate) fn factor(
+        &self,
+        updates: &[NodeUpdate],
+        old: impl Fn(usize, usize) -> NodeHistory,
+        world: &SimpleCommunicator,
+    ) -> f64 {
+        // [r_{k-1} . (r_k - r_{k-1}), |r_k - r_{k-1}|^2, nodes that started or stopped sticking,
+        //  slipping nodes]
+        let mut local = [0.0; 4];
+        let mut both = 0;
+        let mut now = 0;
+        for u in updates.iter().filter(|u| u.sticks()) {
+            now += 1;
+            if let Some(before) = self.previous.get(&(u.pass, u.node)) {
+                both += 1;
+                let r = increment(&old(u.pass, u.node), &u.history);
+                let d: [f64; 3] = std::array::from_fn(|c| r[c] - before[c]);
+                local[0] += before[0] * d[0] + before[1] * d[1] + before[2] * d[2];
+                local[1] += d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+            }
+        }
+        local[2] = ((now - both) + (self.previous.len() - both)) as f64;
+        local[3] = updates.iter().filter(|u| u.status == 2).count() as f64;
+        let mut sums = [0.0; 4];
+        world.all_reduce_into(&local[..], &mut sums[..], SystemOperation::sum());
+        if sums[2] > 0.0 || sums[3] > 0.0 {
+            return 1.0;
+        }
+        aitken(self.omega, sums[0], sums[1])
+    }
+
+    /// Remembers the plain updates of this augmentation, taken with factor `omega`.
+    pub(crate) fn remember(
+        &mut self,
+        omega: f64,
+        updates: &[NodeUpdate],
+        old: impl Fn(usize, usize) -> NodeHistory,
+    ) {
+        self.omega = omega;
+        self.previous = updates
+            .iter()
+            .filter(|u| u.sticks())
+            .map(|u| {
+                let r = increment(&old(u.pass, u.node), &u.history);
+                ((u.pass, u.node), r)
+            })
+            .collect();
+    }
+}
+
+/// Aitken's factor from the last one (`0`: none yet) and the sums
+/// `r_{k-1} . (r_k - r_{k-1})` and `|r_k - r_{k-1}|^2`, within `[1, MAX_RELAXATION]`.
+fn aitken(last: f64, cross: f64, square: f64) -> f64 {
+    if last == 0.0 || square <= 0.0 {
+        return 1.0;
+    }
+    let omega = -last * cross / square;
+    if omega.is_finite() {
+        omega.clamp(1.0, MAX_RELAXATION)
+    } else {
+        1.0
+    }
+}
+
+/// The plain update's change of the tangential multiplier.
+fn increment(old: &NodeHistory, new: &NodeHistory) -> [f64; 3] {
+    std::array::from_fn(|c| new.lambda_t[c] - old.lambda_t[c])
+}
+
+/// The multipliers a node takes: the plain update `new` of `old`, with the tangential change of
+/// a sticking node scaled by `omega` unless its carried traction would reach the Coulomb cone
+/// `mu lambda_N` of the updated pressure.
+pub(crate) fn relaxed(old: &NodeHistory, update: &NodeUpdate, omega: f64, mu: f64) -> NodeHistory {
+    let new = update.history;
+    if !update.sticks() || omega == 1.0 {
+        return new;
+    }
+    let r = increment(old, &new);
+    let lambda_t: [f64; 3] = std::array::from_fn(|c| old.lambda_t[c] + omega * r[c]);
+    let carried: [f64; 3] = std::array::from_fn(|c| new.traction_t_old[c] + lambda_t[c]);
+    if norm(carried) < (1.0 - CONE_TIE) * mu * new.lambda_n {
+        NodeHistory { lambda_t, ..new }
+    } else {
+        new
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// One sticking node of stiffness `k` under a penalty `eps`: the slip the solve leaves with
+    /// multiplier `lambda`, for a load that needs the multiplier `target`.
+    fn slip(k: f64, eps: f64, target: f64, lambda: f64) -> f64 {
+        (target - lambda) / (k + eps)
+    }
+
+    #[test]
+    fn the_second_augmentation_of_one_node_lands_on_its_multiplier() {
+        let (k, eps, target) = (7.0, 1.0, 3.0);
+        let r0 = eps * slip(k, eps, target, 0.0);
+        let lambda1 = r0;
+        let r1 = eps * slip(k, eps, target, lambda1);
+        let omega = aitken(1.0, r0 * (r1 - r0), (r1 - r0) * (r1 - r0));
+        assert!((omega - (k + eps) / eps).abs() < 1e-12, "omega {omega}");
+        let lambda2 = lambda1 + omega * r1;
+        assert!((lambda2 - target).abs() < 1e-12, "lambda {lambda2}");
+    }
+
+    #[test]
+    fn the_factor_stays_within_its_bounds() {
+        assert_eq!(aitken(0.0, -1.0, 1.0), 1.0, "first augmentation");
+        assert_eq!(aitken(1.0, -1.0, 0.0), 1.0, "no change");
+        assert_eq!(aitken(1.0, 1.0, 1.0), 1.0, "growing updates");
+        assert_eq!(
+            aitken(1.0, -1.0, 1e-3),
+            MAX_RELAXATION,
+            "nearly equal updates"
+        );
+        assert_eq!(aitken(1.0, f64::NAN, 1.0), 1.0, "not a number");
+    }
+
+    #[test]
+    fn a_relaxed_stick_stays_inside_the_cone() {
+        let old = NodeHistory {
+            lambda_n: 1.0,
+            lambda_t: [0.0; 3],
+            normal_old: [0.0, 0.0, 1.0],
+            traction_t_old: [0.1, 0.0, 0.0],
+        };
+        let update = |lambda_t| NodeUpdate {
+            pass: 0,
+            node: 0,
+            violation: 2.0,
+            history: NodeHistory {
+                lambda_n: 1.0,
+                lambda_t,
+                ..old
+            },
+            status: 1,
+        };
+        let inside = relaxed(&old, &update([0.01, 0.0, 0.0]), 5.0, 0.2);
+        assert!((inside.lambda_t[0] - 0.05).abs() < 1e-15);
+        let beyond = relaxed(&old, &update([0.03, 0.0, 0.0]), 5.0, 0.2);
+        assert_eq!(beyond.lambda_t, [0.03, 0.0, 0.0], "the plain update");
+        let slipping = NodeUpdate {
+            status: 2,
+            ..update([0.01, 0.0, 0.0])
+        };
+        assert_eq!(
+            relaxed(&old, &slipping, 5.0, 0.2).lambda_t,
+            [0.01, 0.0, 0.0]
+        );
+    }
+}
