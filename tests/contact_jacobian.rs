@@ -74,7 +74,7 @@ fn jacobian_matches_finite_differences(case: &std::path::Path) {
     let last = history.rows().pop().unwrap();
     let tangential = last[history.column("contact_slide_tangential")];
     let normal = last[history.column("contact_slide_normal")];
-    let ratio = tangential / (0.3 * normal);
+    let ratio = tangential / (common::SLIDE_FRICTION * normal);
     assert!(
         (ratio - 1.0).abs() < 0.01,
         "last step: t / (mu n) = {ratio}"

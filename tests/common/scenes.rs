@@ -192,6 +192,9 @@ components = ["x", "y", "z"]
     )
 }
 
+/// The Coulomb coefficient of [`slide_case`] (its text reads `friction = 0.3`).
+pub const SLIDE_FRICTION: f64 = 0.3;
+
 /// A small frictional slide (Hex8, one pass, mu = 0.3): compressed, then the upper block pushed
 /// sideways, with the upper block narrower than the lower one so that its edges slide over the
 /// lower surface.
@@ -226,7 +229,7 @@ name = "slide"
 kind = "contact"
 secondary = "up.zmin"
 primary = "low.zmax"
-friction = 0.3
+friction = {SLIDE_FRICTION}
 [steps]
 count = {steps}
 "#

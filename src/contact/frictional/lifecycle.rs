@@ -11,7 +11,7 @@ use crate::vec3::norm;
 
 use super::coverage::{coverage_scale, FADE_COVERAGE};
 use super::pass::NodeState;
-use super::relaxation::{relaxed, NodeUpdate};
+use super::relaxation::NodeUpdate;
 use super::ContactInterfaces;
 
 /// A state saved before a step, to restore when the step is cut.
@@ -58,16 +58,17 @@ impl ContactInterfaces {
             let mut omega = 1.0;
             if iface.mu > 0.0 && iface.uzawa_relaxation == UzawaRelaxation::Aitken {
                 let old = |p: usize, a: usize| iface.passes[p].state[a].history;
-                omega = iface.relaxation.factor(&updates, old, world);
-                iface.relaxation.remember(omega, &updates, old);
+                omega = iface.relaxation.next(&updates, old, world);
             }
             for u in &updates {
                 let st = &mut iface.passes[u.pass].state[u.node];
-                st.history = relaxed(&st.history, u, omega, iface.mu);
+                st.history = iface.relaxation.relaxed(&st.history, u, omega, iface.mu);
             }
             if violation > 0.25 * iface.last_violation && iface.penalty_growth > 1.0 {
                 iface.penalty_scale =
                     (iface.penalty_scale * iface.penalty_growth).min(iface.penalty_growth_cap);
+                // (Aitken's factor compares updates of one penalty.)
+                iface.relaxation.reset();
             }
             iface.last_violation = violation;
             result = Augmented::Updated;

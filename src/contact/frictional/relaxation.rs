@@ -5,16 +5,15 @@
 //!
 //! A sticking node's plain Uzawa update adds `r_A = eps_T dsh_A` (its elastic slip over the
 //! step, times the tangential penalty) to its tangential multiplier. The next solve removes only
-//! part of that slip: for one node held by a structure of stiffness `k`, the slip after update
-//! `k` is
+//! part of that slip: for one node held by a structure of stiffness `K`, each update leaves
 //!
 //! ```text
-//! s_k = (k / (k + eps_T))^k s_0,
+//! s_{k+1} = K / (K + eps_T) s_k
 //! ```
 //!
-//! a factor about 0.9 per augmentation with the default `eps_T = E / h_A`, whose stiffness a
-//! block much larger than `h_A` exceeds several times. Over a whole interface the factor is
-//! that of the interface's stiffest mode of tangential motion.
+//! of the slip, a factor about 0.9 with the default `eps_T = E / h_A`, whose stiffness a block
+//! much larger than `h_A` exceeds several times. Over a whole interface the factor is that of
+//! the interface's stiffest mode of tangential motion.
 //!
 //! # The update
 //!
@@ -23,22 +22,30 @@
 //! coupling) scales each update by a factor taken from the last two:
 //!
 //! ```text
-//! omega_k = -omega_{k-1} (r_{k-1} . (r_k - r_{k-1})) / |r_k - r_{k-1}|^2
+//! omega_k = -omega_{k-1} (r_{k-1} . (r_k - r_{k-1})) / |r_k - r_{k-1}|^2,   omega_0 = 1
 //! lambda_T <- lambda_T + omega_k r_k
 //! ```
 //!
-//! with the dot products summed over the sticking nodes of the interface (over every rank) that
-//! stuck in both augmentations. For one node (or one dominant mode) `r_k = (1 - c omega_{k-1})
-//! r_{k-1}` with `c = eps_T / (k + eps_T)`, and the formula gives `omega_k = 1 / c`: the update
-//! that removes the slip in one step. The first augmentation of a step takes `omega = 1`, and
-//! `omega` is kept within `[1, MAX_RELAXATION]` (below 1 the plain update, which converges, is the
-//! better one; the cap bounds the step where the two updates are nearly equal).
+//! with the dot products summed over the sticking nodes of the interface (over every rank). For
+//! one node (or one dominant mode) `r_k = (1 - c omega_{k-1}) r_{k-1}` with
+//! `c = eps_T / (K + eps_T)`, and the formula gives `omega_k = 1 / c`: the update that removes
+//! the slip in one step. `omega` is kept within `[1, MAX_RELAXATION]` (below 1 the plain update,
+//! which converges, is the better one; the cap bounds the step where the two updates are nearly
+//! equal).
 //!
-//! Only the tangential multiplier of a sticking node is relaxed: the normal multiplier and a
-//! slipping node (whose traction the return map sets to `mu p`) take the plain update. A relaxed
-//! multiplier whose carried traction `|t_old + lambda_T|` would reach the Coulomb cone of the
-//! updated pressure takes the plain update too, so that relaxation never turns a stick into a
-//! slip by itself.
+//! The formula assumes a fixed linear map from the multipliers to the slips, so the whole
+//! interface takes the plain update (`omega = 1`) in its step's first augmentation and in any
+//! augmentation where
+//! - a pressed node of the interface slips: beside slipping nodes an over-relaxed stick moves
+//!   load onto them (docs/performance.md, "Uzawa augmentations");
+//! - a node started or stopped sticking since the last augmentation;
+//! - in the last augmentation a node took the plain update instead of the relaxed one (below),
+//!   so that the last step was not `omega r`.
+//!
+//! Within a relaxed augmentation a node whose relaxed carried traction `|t_old + lambda_T|`
+//! would reach the Coulomb cone `mu lambda_N` of the updated pressure takes the plain update,
+//! so that relaxation never turns a stick into a slip by itself. Normal multipliers are never
+//! relaxed.
 
 use std::collections::HashMap;
 
@@ -67,82 +74,121 @@ impl NodeUpdate {
     fn sticks(&self) -> bool {
         self.status == 1
     }
+
+    fn slips(&self) -> bool {
+        self.status == 2
+    }
 }
 
 /// The relaxation of one interface over the augmentations of the step under way.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub(crate) struct Relaxation {
-    /// The factor of the last augmentation of the step; 0 before the first.
-    omega: f64,
-    /// The plain tangential update `r` of every node that stuck in the last augmentation,
-    /// by `(pass, node)`.
-    previous: HashMap<(usize, usize), [f64; 3]>,
+    /// The factor of the last augmentation of the step (1 before the first).
+    pub(super) omega: f64,
+    /// The plain tangential update `r` of every node of this rank that stuck in the last
+    /// augmentation, by `(pass, node)`.
+    pub(super) previous: HashMap<(usize, usize), [f64; 3]>,
+    /// A node of this rank took the plain update instead of the relaxed one in the last
+    /// augmentation.
+    pub(super) fell_back: bool,
+}
+
+impl Default for Relaxation {
+    fn default() -> Self {
+        Relaxation {
+            omega: 1.0,
+            previous: HashMap::new(),
+            fell_back: false,
+        }
+    }
 }
 
 impl Relaxation {
-    /// Forgets the step's augmentations (a new step, or a cut one).
+    /// Forgets the step's augmentations (a new step, a cut one, or grown penalties).
     pub(crate) fn reset(&mut self) {
-        self.omega = 0.0;
-        self.previous.clear();
+        *self = Relaxation::default();
     }
 
     /// The factor of this augmentation, from the plain `updates` of the interface's nodes on
-    /// this rank and the multipliers they were computed with, `old(pass, node)`
-    /// (*collective*: sums over every rank).
-    pub(crate) fn factor(
-        &self,
+    /// this rank and the multipliers they were computed with, `old(pass, node)`; the updates of
+    /// the sticking nodes are kept for the next augmentation (*collective*: sums over every
+    /// rank).
+    pub(crate) fn next(
+        &mut self,
         updates: &[NodeUpdate],
         old: impl Fn(usize, usize) -> NodeHistory,
         world: &SimpleCommunicator,
     ) -> f64 {
-        // [r_{k-1} . (r_k - r_{k-1}), |r_k - r_{k-1}|^2, nodes that started or stopped sticking,
-        //  slipping nodes]
-        let mut local = [0.0; 4];
+        let increments: Vec<((usize, usize), [f64; 3])> = updates
+            .iter()
+            .filter(|u| u.sticks())
+            .map(|u| {
+                (
+                    (u.pass, u.node),
+                    increment(&old(u.pass, u.node), &u.history),
+                )
+            })
+            .collect();
+        // [r_{k-1} . (r_k - r_{k-1}), |r_k - r_{k-1}|^2, reasons for the plain update]
+        let mut local = [0.0; 3];
         let mut both = 0;
-        let mut now = 0;
-        for u in updates.iter().filter(|u| u.sticks()) {
-            now += 1;
-            if let Some(before) = self.previous.get(&(u.pass, u.node)) {
+        for (key, r) in &increments {
+            if let Some(before) = self.previous.get(key) {
                 both += 1;
-                let r = increment(&old(u.pass, u.node), &u.history);
                 let d: [f64; 3] = std::array::from_fn(|c| r[c] - before[c]);
                 local[0] += before[0] * d[0] + before[1] * d[1] + before[2] * d[2];
                 local[1] += d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
             }
         }
-        local[2] = ((now - both) + (self.previous.len() - both)) as f64;
-        local[3] = updates.iter().filter(|u| u.status == 2).count() as f64;
-        let mut sums = [0.0; 4];
+        let changed = (increments.len() - both) + (self.previous.len() - both);
+        let slipping = updates.iter().filter(|u| u.slips()).count();
+        local[2] = (changed + slipping + usize::from(self.fell_back)) as f64;
+        let mut sums = [0.0; 3];
         world.all_reduce_into(&local[..], &mut sums[..], SystemOperation::sum());
-        if sums[2] > 0.0 || sums[3] > 0.0 {
-            return 1.0;
-        }
-        aitken(self.omega, sums[0], sums[1])
+        let omega = if sums[2] > 0.0 {
+            1.0
+        } else {
+            aitken(self.omega, sums[0], sums[1])
+        };
+        *self = Relaxation {
+            omega,
+            previous: increments.into_iter().collect(),
+            fell_back: false,
+        };
+        omega
     }
 
-    /// Remembers the plain updates of this augmentation, taken with factor `omega`.
-    pub(crate) fn remember(
+    /// The multipliers a node takes: the plain update of `old`, with the tangential change of
+    /// a sticking node scaled by `omega` unless its carried traction would reach the Coulomb
+    /// cone `mu lambda_N` of the updated pressure (a fallback, remembered for the next
+    /// augmentation).
+    pub(crate) fn relaxed(
         &mut self,
+        old: &NodeHistory,
+        update: &NodeUpdate,
         omega: f64,
-        updates: &[NodeUpdate],
-        old: impl Fn(usize, usize) -> NodeHistory,
-    ) {
-        self.omega = omega;
-        self.previous = updates
-            .iter()
-            .filter(|u| u.sticks())
-            .map(|u| {
-                let r = increment(&old(u.pass, u.node), &u.history);
-                ((u.pass, u.node), r)
-            })
-            .collect();
+        mu: f64,
+    ) -> NodeHistory {
+        let new = update.history;
+        if !update.sticks() || omega == 1.0 {
+            return new;
+        }
+        let r = increment(old, &new);
+        let lambda_t: [f64; 3] = std::array::from_fn(|c| old.lambda_t[c] + omega * r[c]);
+        let carried: [f64; 3] = std::array::from_fn(|c| new.traction_t_old[c] + lambda_t[c]);
+        if norm(carried) < (1.0 - CONE_TIE) * mu * new.lambda_n {
+            NodeHistory { lambda_t, ..new }
+        } else {
+            self.fell_back = true;
+            new
+        }
     }
 }
 
-/// Aitken's factor from the last one (`0`: none yet) and the sums
-/// `r_{k-1} . (r_k - r_{k-1})` and `|r_k - r_{k-1}|^2`, within `[1, MAX_RELAXATION]`.
+/// Aitken's factor from the last one and the sums `r_{k-1} . (r_k - r_{k-1})` and
+/// `|r_k - r_{k-1}|^2`, within `[1, MAX_RELAXATION]`.
 fn aitken(last: f64, cross: f64, square: f64) -> f64 {
-    if last == 0.0 || square <= 0.0 {
+    if square <= 0.0 {
         return 1.0;
     }
     let omega = -last * cross / square;
@@ -156,24 +202,6 @@ fn aitken(last: f64, cross: f64, square: f64) -> f64 {
 /// The plain update's change of the tangential multiplier.
 fn increment(old: &NodeHistory, new: &NodeHistory) -> [f64; 3] {
     std::array::from_fn(|c| new.lambda_t[c] - old.lambda_t[c])
-}
-
-/// The multipliers a node takes: the plain update `new` of `old`, with the tangential change of
-/// a sticking node scaled by `omega` unless its carried traction would reach the Coulomb cone
-/// `mu lambda_N` of the updated pressure.
-pub(crate) fn relaxed(old: &NodeHistory, update: &NodeUpdate, omega: f64, mu: f64) -> NodeHistory {
-    let new = update.history;
-    if !update.sticks() || omega == 1.0 {
-        return new;
-    }
-    let r = increment(old, &new);
-    let lambda_t: [f64; 3] = std::array::from_fn(|c| old.lambda_t[c] + omega * r[c]);
-    let carried: [f64; 3] = std::array::from_fn(|c| new.traction_t_old[c] + lambda_t[c]);
-    if norm(carried) < (1.0 - CONE_TIE) * mu * new.lambda_n {
-        NodeHistory { lambda_t, ..new }
-    } else {
-        new
-    }
 }
 
 #[cfg(test)]
@@ -200,7 +228,6 @@ mod tests {
 
     #[test]
     fn the_factor_stays_within_its_bounds() {
-        assert_eq!(aitken(0.0, -1.0, 1.0), 1.0, "first augmentation");
         assert_eq!(aitken(1.0, -1.0, 0.0), 1.0, "no change");
         assert_eq!(aitken(1.0, 1.0, 1.0), 1.0, "growing updates");
         assert_eq!(
@@ -230,17 +257,22 @@ mod tests {
             },
             status: 1,
         };
-        let inside = relaxed(&old, &update([0.01, 0.0, 0.0]), 5.0, 0.2);
+        let mut relaxation = Relaxation::default();
+        let inside = relaxation.relaxed(&old, &update([0.01, 0.0, 0.0]), 5.0, 0.2);
         assert!((inside.lambda_t[0] - 0.05).abs() < 1e-15);
-        let beyond = relaxed(&old, &update([0.03, 0.0, 0.0]), 5.0, 0.2);
-        assert_eq!(beyond.lambda_t, [0.03, 0.0, 0.0], "the plain update");
+        assert!(!relaxation.fell_back);
         let slipping = NodeUpdate {
             status: 2,
             ..update([0.01, 0.0, 0.0])
         };
-        assert_eq!(
-            relaxed(&old, &slipping, 5.0, 0.2).lambda_t,
-            [0.01, 0.0, 0.0]
+        let plain = relaxation.relaxed(&old, &slipping, 5.0, 0.2);
+        assert_eq!(plain.lambda_t, [0.01, 0.0, 0.0]);
+        assert!(
+            !relaxation.fell_back,
+            "a slipping node takes the plain update"
         );
+        let beyond = relaxation.relaxed(&old, &update([0.03, 0.0, 0.0]), 5.0, 0.2);
+        assert_eq!(beyond.lambda_t, [0.03, 0.0, 0.0], "the plain update");
+        assert!(relaxation.fell_back, "a fallback is remembered");
     }
 }

@@ -80,6 +80,13 @@ pub(crate) fn scene_of(case: &str) -> Scene {
     scene
 }
 
+/// The contact interfaces of `scene` with every element on rank 0 of 1.
+fn on_one_rank(scene: &Scene) -> ContactInterfaces {
+    let elements = vec![0; scene.mesh.num_elements()];
+    let dofs = DofMap::new(&scene.mesh, elements, 0, 1, &scene.constrained_mask());
+    ContactInterfaces::new(scene, &dofs).unwrap()
+}
+
 /// The Uzawa bookkeeping of partly covered nodes ([`partly_covered_blocks`]), every node
 /// starting with multipliers. One Uzawa update
 /// - releases the multipliers of the nodes without traction (no overlap, or below
@@ -94,9 +101,7 @@ pub(crate) fn scene_of(case: &str) -> Scene {
 #[test]
 fn uzawa_skips_fading_nodes_and_releases_nodes_without_traction() {
     let scene = partly_covered_blocks();
-    let elements = vec![0; scene.mesh.num_elements()];
-    let dofs = DofMap::new(&scene.mesh, elements, 0, 1, &scene.constrained_mask());
-    let mut contact = ContactInterfaces::new(&scene, &dofs).unwrap();
+    let mut contact = on_one_rank(&scene);
     const LAMBDA_N: f64 = 5.0;
     for st in &mut contact.interfaces[0].passes[0].state {
         st.history.lambda_n = LAMBDA_N;
@@ -162,6 +167,38 @@ fn uzawa_skips_fading_nodes_and_releases_nodes_without_traction() {
             assert_eq!(history.lambda_n, LAMBDA_N, "node {a}");
         }
     }
+}
+
+/// Aitken's relaxation of the Uzawa updates lives within one step: closing the step and
+/// restoring a cut one both forget the factor, the updates and a fallback, so that neither a
+/// new step nor a checkpoint (written after a closed step) carries them.
+#[test]
+fn a_step_starts_its_relaxation_afresh() {
+    let scene = partly_covered_blocks();
+    let mut contact = on_one_rank(&scene);
+    let u = vec![0.0; 3 * scene.mesh.num_nodes()];
+    let at = State {
+        scene: &scene,
+        u: &u,
+        t: 1.0,
+    };
+    let saved = contact.snapshot();
+    let under_way = |contact: &mut ContactInterfaces| {
+        let relaxation = &mut contact.interfaces[0].relaxation;
+        relaxation.omega = 4.0;
+        relaxation.previous.insert((0, 3), [1.0, 0.0, 0.0]);
+        relaxation.fell_back = true;
+    };
+    let fresh = |contact: &ContactInterfaces| {
+        let relaxation = &contact.interfaces[0].relaxation;
+        relaxation.omega == 1.0 && relaxation.previous.is_empty() && !relaxation.fell_back
+    };
+    under_way(&mut contact);
+    contact.close_step(&at);
+    assert!(fresh(&contact), "closing a step");
+    under_way(&mut contact);
+    contact.restore_snapshot(&saved);
+    assert!(fresh(&contact), "restoring a cut step");
 }
 
 /// A tangent linearizes only the pairs of the faces that carry a pressed node
