@@ -57,8 +57,7 @@ impl ContactInterfaces {
             // (A frictionless interface has no sticking node to relax.)
             let mut omega = 1.0;
             if iface.mu > 0.0 && iface.uzawa_relaxation == UzawaRelaxation::Aitken {
-                let old = |p: usize, a: usize| iface.passes[p].state[a].history;
-                omega = iface.relaxation.next(&updates, old, world);
+                omega = iface.relaxation.next(&updates, world);
             }
             for u in &updates {
                 let st = &mut iface.passes[u.pass].state[u.node];
@@ -124,13 +123,14 @@ impl ContactInterfaces {
                 } else {
                     0.0
                 };
-                out.push(NodeUpdate {
-                    pass: p,
-                    node: a,
-                    violation: (dn / iface.uzawa_tol / st.h).max(dt),
-                    history: new,
-                    status: if iface.mu > 0.0 { f.status } else { 0 },
-                });
+                let violation = (dn / iface.uzawa_tol / st.h).max(dt);
+                out.push(NodeUpdate::plain(
+                    (p, a),
+                    violation,
+                    &st.history,
+                    new,
+                    f.status,
+                ));
             }
         }
         out

@@ -59,18 +59,38 @@ use crate::vec3::norm;
 pub(crate) const MAX_RELAXATION: f64 = 10.0;
 
 /// One node's Uzawa update: `(pass, node)`, its violation as a multiple of its tolerance, the
-/// plain update and the node's state under the law (`fields::status_code`: 0 open, 1 stick,
-/// 2 slip; 0 without friction).
+/// plain update, the change it makes to the tangential multiplier, and the node's state under
+/// the law (`fields::status_code`: 0 open, 1 stick, 2 slip).
 #[derive(Clone, Debug)]
 pub(crate) struct NodeUpdate {
     pub(crate) pass: usize,
     pub(crate) node: usize,
     pub(crate) violation: f64,
     pub(crate) history: NodeHistory,
+    /// `r = history.lambda_t - lambda_t` of the multipliers the update was computed from.
+    pub(crate) increment: [f64; 3],
     pub(crate) status: u8,
 }
 
 impl NodeUpdate {
+    /// The update `new` of the multipliers `old` of node `node` of pass `pass`.
+    pub(crate) fn plain(
+        (pass, node): (usize, usize),
+        violation: f64,
+        old: &NodeHistory,
+        new: NodeHistory,
+        status: u8,
+    ) -> NodeUpdate {
+        NodeUpdate {
+            pass,
+            node,
+            violation,
+            increment: std::array::from_fn(|c| new.lambda_t[c] - old.lambda_t[c]),
+            history: new,
+            status,
+        }
+    }
+
     fn sticks(&self) -> bool {
         self.status == 1
     }
@@ -110,24 +130,13 @@ impl Relaxation {
     }
 
     /// The factor of this augmentation, from the plain `updates` of the interface's nodes on
-    /// this rank and the multipliers they were computed with, `old(pass, node)`; the updates of
-    /// the sticking nodes are kept for the next augmentation (*collective*: sums over every
-    /// rank).
-    pub(crate) fn next(
-        &mut self,
-        updates: &[NodeUpdate],
-        old: impl Fn(usize, usize) -> NodeHistory,
-        world: &SimpleCommunicator,
-    ) -> f64 {
+    /// this rank; the updates of the sticking nodes are kept for the next augmentation
+    /// (*collective*: sums over every rank).
+    pub(crate) fn next(&mut self, updates: &[NodeUpdate], world: &SimpleCommunicator) -> f64 {
         let increments: Vec<((usize, usize), [f64; 3])> = updates
             .iter()
             .filter(|u| u.sticks())
-            .map(|u| {
-                (
-                    (u.pass, u.node),
-                    increment(&old(u.pass, u.node), &u.history),
-                )
-            })
+            .map(|u| ((u.pass, u.node), u.increment))
             .collect();
         // [r_{k-1} . (r_k - r_{k-1}), |r_k - r_{k-1}|^2, reasons for the plain update]
         let mut local = [0.0; 3];
@@ -173,7 +182,7 @@ impl Relaxation {
         if !update.sticks() || omega == 1.0 {
             return new;
         }
-        let r = increment(old, &new);
+        let r = update.increment;
         let lambda_t: [f64; 3] = std::array::from_fn(|c| old.lambda_t[c] + omega * r[c]);
         let carried: [f64; 3] = std::array::from_fn(|c| new.traction_t_old[c] + lambda_t[c]);
         if norm(carried) < (1.0 - CONE_TIE) * mu * new.lambda_n {
@@ -197,11 +206,6 @@ fn aitken(last: f64, cross: f64, square: f64) -> f64 {
     } else {
         1.0
     }
-}
-
-/// The plain update's change of the tangential multiplier.
-fn increment(old: &NodeHistory, new: &NodeHistory) -> [f64; 3] {
-    std::array::from_fn(|c| new.lambda_t[c] - old.lambda_t[c])
 }
 
 #[cfg(test)]
@@ -246,16 +250,13 @@ mod tests {
             normal_old: [0.0, 0.0, 1.0],
             traction_t_old: [0.1, 0.0, 0.0],
         };
-        let update = |lambda_t| NodeUpdate {
-            pass: 0,
-            node: 0,
-            violation: 2.0,
-            history: NodeHistory {
+        let update = |lambda_t| {
+            let new = NodeHistory {
                 lambda_n: 1.0,
                 lambda_t,
                 ..old
-            },
-            status: 1,
+            };
+            NodeUpdate::plain((0, 0), 2.0, &old, new, 1)
         };
         let mut relaxation = Relaxation::default();
         let inside = relaxation.relaxed(&old, &update([0.01, 0.0, 0.0]), 5.0, 0.2);
