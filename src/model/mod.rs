@@ -256,6 +256,12 @@ pub trait Contribution {
     /// Adds this rank's terms of the tangent `dF/du` to `out`.
     fn jacobian(&self, at: &State, out: &mut dyn TangentSink) -> Result<Option<DomainIssue>>;
 
+    /// The largest fraction of the Newton update `du` (indexed as `at.u`) from `at` this
+    /// contribution accepts, in `(0, 1]`: contact keeps what its search sees within its reach.
+    fn step_fraction(&self, _at: &State, _du: &[f64]) -> f64 {
+        1.0
+    }
+
     /// Whether this contribution is enforced by penalty plus Uzawa augmentations.
     fn is_augmented(&self) -> bool {
         false
@@ -352,6 +358,19 @@ impl Model {
         nodes.sort_unstable();
         nodes.dedup();
         nodes
+    }
+
+    /// Whether some contribution's matrix pattern moves with the displacements (contact).
+    pub fn pattern_moves(&self) -> bool {
+        self.parts.iter().any(|c| c.pattern_moves())
+    }
+
+    /// The smallest [`Contribution::step_fraction`] of this rank's contributions.
+    pub fn step_fraction(&self, at: &State, du: &[f64]) -> f64 {
+        self.parts
+            .iter()
+            .map(|c| c.step_fraction(at, du))
+            .fold(1.0, f64::min)
     }
 
     /// Whether some contribution is enforced by penalty plus Uzawa augmentations.

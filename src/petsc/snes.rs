@@ -116,6 +116,8 @@ fn options_error(options_source: &str, e: Error) -> Error {
 
 type ResidualFn<'a> = dyn FnMut(&Vector, &mut Vector) -> Result<(), CallbackError> + 'a;
 type JacobianFn<'a> = dyn FnMut(&Vector, &mut Matrix) -> Result<(), CallbackError> + 'a;
+/// `limit(x, y)`: the fraction (in `(0, 1]`) of the Newton update `-y` from `x` to take.
+pub type StepLimitFn<'a> = dyn FnMut(&Vector, &Vector) -> Result<f64, CallbackError> + 'a;
 
 enum Failure {
     Panic(Box<dyn Any + Send>),
@@ -125,6 +127,7 @@ enum Failure {
 struct Context<'a> {
     residual: &'a mut ResidualFn<'a>,
     jacobian: &'a mut JacobianFn<'a>,
+    step_limit: Option<&'a mut StepLimitFn<'a>>,
     failure: Option<Failure>,
     domain_error: Option<String>,
 }
@@ -285,9 +288,24 @@ impl Snes {
         residual: &'a mut ResidualFn<'a>,
         jacobian: &'a mut JacobianFn<'a>,
     ) -> Result<SnesOutcome> {
+        self.solve_limited(x, jac, (residual, jacobian), None)
+    }
+
+    /// [`Snes::solve`], with every Newton update first shortened to the fraction
+    /// `step_limit(x, y)` of it (a pre-check of the line search: the full step, `bt` and `l2`
+    /// search along the shortened update).
+    pub fn solve_limited<'a>(
+        &mut self,
+        x: &mut Vector,
+        jac: &mut Matrix,
+        (residual, jacobian): (&'a mut ResidualFn<'a>, &'a mut JacobianFn<'a>),
+        step_limit: Option<&'a mut StepLimitFn<'a>>,
+    ) -> Result<SnesOutcome> {
+        let limited = step_limit.is_some();
         let mut ctx = Context {
             residual,
             jacobian,
+            step_limit,
             failure: None,
             domain_error: None,
         };
@@ -306,6 +324,15 @@ impl Snes {
             Some(jacobian_trampoline),
             ctx_ptr
         ))?;
+        let mut ls: p::SNESLineSearch = std::ptr::null_mut();
+        chk!(SNESGetLineSearch(self.raw, &mut ls))?;
+        if limited {
+            chk!(SNESLineSearchSetPreCheck(
+                ls,
+                Some(step_limit_trampoline),
+                ctx_ptr
+            ))?;
+        }
         let n = super::to_petsc_int(self.history.len())?;
         chk!(SNESSetConvergenceHistory(
             self.raw,
@@ -316,6 +343,9 @@ impl Snes {
         ))?;
         let solved = chk!(SNESSolve(self.raw, std::ptr::null_mut(), x.raw));
         // Detach the context: it lives on this stack frame only.
+        if limited {
+            chk!(SNESLineSearchSetPreCheck(ls, None, std::ptr::null_mut()))?;
+        }
         chk!(SNESSetFunction(
             self.raw,
             f.raw,
@@ -624,6 +654,32 @@ unsafe extern "C" fn jacobian_trampoline(
             let xv = Vector::from_borrowed(x)?;
             let mut jm = Matrix::from_borrowed(pmat)?;
             (c.jacobian)(&xv, &mut jm)
+        },
+    )
+}
+
+unsafe extern "C" fn step_limit_trampoline(
+    _ls: p::SNESLineSearch,
+    x: p::Vec,
+    y: p::Vec,
+    changed: *mut p::PetscBool,
+    ctx: *mut c_void,
+) -> p::PetscErrorCode {
+    run_callback(
+        ctx,
+        || {},
+        |c| {
+            let Some(limit) = c.step_limit.as_mut() else {
+                return Ok(());
+            };
+            let xv = Vector::from_borrowed(x)?;
+            let mut yv = Vector::from_borrowed(y)?;
+            let fraction = limit(&xv, &yv)?;
+            if fraction < 1.0 {
+                yv.scale(fraction)?;
+                *changed = p::PetscBool::PETSC_TRUE;
+            }
+            Ok(())
         },
     )
 }

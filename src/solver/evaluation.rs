@@ -49,6 +49,16 @@ impl Evaluator {
         Ok(())
     }
 
+    /// The Newton update `-y` (`y`: PETSc's search direction over the free dofs) at every dof
+    /// this rank touches, indexed as `u` (constrained dofs 0).
+    pub fn update_of(&mut self, dofs: &DofMap, y: &Vector) -> Result<Vec<f64>> {
+        let mut du = vec![0.0; self.u.len()];
+        for (&d, v) in dofs.gathered_dofs.iter().zip(self.scatter.gather(y)?) {
+            du[d] = -v;
+        }
+        Ok(du)
+    }
+
     /// The state of the last [`Evaluator::load`].
     pub fn state<'a>(&'a self, scene: &'a Scene) -> State<'a> {
         State {

@@ -10,7 +10,7 @@ use crate::error::{print_warning, Error, Result};
 use crate::interrupt;
 use crate::io::output::StepRecord;
 use crate::model::Augmented;
-use crate::petsc::{CallbackError, SnesOutcome};
+use crate::petsc::{CallbackError, SnesOutcome, StepLimitFn, Vector};
 
 use super::assembly;
 use super::cut::{cut_limit, describe, what_to_change};
@@ -270,9 +270,29 @@ impl Run<'_> {
             let _stage = assembly_stage.map(|st| st.push()).transpose()?;
             report(ev.jacobian(x, j)?)
         };
+        // Contact keeps every update within its search's reach (`reach_fraction`).
+        let (cx, model, monitor) = (&self.cx, &self.model, self.contact_monitor);
+        let mut step_limit = |x: &Vector, y: &Vector| -> Result<f64, CallbackError> {
+            let mut ev = cx.evaluator.borrow_mut();
+            ev.load(cx.scene, &cx.dofs, x)?;
+            let du = ev.update_of(&cx.dofs, y)?;
+            let local = model.step_fraction(&ev.state(cx.scene), &du);
+            let mut fraction = local;
+            world.all_reduce_into(&local, &mut fraction, SystemOperation::min());
+            if monitor && fraction < 1.0 && cx.rank == 0 {
+                println!(
+                    "    Newton update shortened to {fraction:.3e} of it (contact search reach)"
+                );
+            }
+            Ok(fraction)
+        };
+        let limit = self
+            .model
+            .pattern_moves()
+            .then_some(&mut step_limit as &mut StepLimitFn);
         let l = &mut self.linear;
         l.snes
-            .solve(&mut l.x, &mut l.jac, &mut residual, &mut jacobian)
+            .solve_limited(&mut l.x, &mut l.jac, (&mut residual, &mut jacobian), limit)
     }
 
     /// After a converged solve: one Uzawa step of the augmented contributions. Returns true

@@ -394,36 +394,45 @@ impl ContactPass {
 
     /// `a_A`, `g_A` and (friction) the current weights on the old positions.
     pub(crate) fn kinematics(&self, ctx: &EvalContext, terms: &[(&PairData, usize)]) -> Kinematics {
-        let mut k = Kinematics {
-            area: 0.0,
-            gap: [0.0; 3],
-            gap_at_old: [0.0; 3],
+        let (area, gap) = self.weighted_gap(terms, ctx.x);
+        let gap_at_old = if ctx.iface_mu > 0.0 {
+            self.weighted_gap(terms, ctx.x_old).1
+        } else {
+            [0.0; 3]
         };
-        let friction = ctx.iface_mu > 0.0;
+        Kinematics {
+            area,
+            gap,
+            gap_at_old,
+        }
+    }
+
+    /// `a_A = sum_B n1_AB` and the weighted gap `sum_B n1_AB y_B - sum_C n2_AC y_C` of the
+    /// node's `terms` (its pairs and its index in each) at the node values `y`.
+    pub(crate) fn weighted_gap(
+        &self,
+        terms: &[(&PairData, usize)],
+        y: &[[f64; 3]],
+    ) -> (f64, [f64; 3]) {
+        let (mut area, mut gap) = (0.0, [0.0; 3]);
         for &(pair, t) in terms {
             let w = &pair.w;
             let (sf, pf) = (&self.sec_faces[pair.s], &self.pri_faces[pair.m]);
             for (b, &n) in sf.nodes.iter().enumerate() {
                 let v = w.n1[t * w.sec_nodes + b];
-                k.area += v;
+                area += v;
                 for c in 0..3 {
-                    k.gap[c] += v * ctx.x[n][c];
-                    if friction {
-                        k.gap_at_old[c] += v * ctx.x_old[n][c];
-                    }
+                    gap[c] += v * y[n][c];
                 }
             }
             for (cn, &n) in pf.nodes.iter().enumerate() {
                 let v = w.n2[t * w.pri_nodes + cn];
                 for c in 0..3 {
-                    k.gap[c] -= v * ctx.x[n][c];
-                    if friction {
-                        k.gap_at_old[c] -= v * ctx.x_old[n][c];
-                    }
+                    gap[c] -= v * y[n][c];
                 }
             }
         }
-        k
+        (area, gap)
     }
 
     /// The normal part of the law at traction node `a` (normal `nu`) from its kinematics

@@ -188,6 +188,7 @@ mod lifecycle;
 mod metrics;
 mod pass;
 mod pattern;
+mod reach;
 mod relaxation;
 mod tangent;
 #[cfg(test)]
@@ -246,6 +247,11 @@ pub const EVAL_MARGIN: f64 = 0.5;
 
 /// Search margin of the matrix pattern made at the start of a step, in face box diagonals.
 pub const PATTERN_MARGIN: f64 = 1.0;
+
+/// The deepest penetration, in `h_A`, a Newton update may take a traction node to
+/// ([`ContactInterfaces::reach_fraction`]): within what the evaluations' search still pairs
+/// ([`EVAL_MARGIN`] box diagonals: `0.71 h_A` on square faces, `h_A` on right triangles).
+pub const PENETRATION_REACH: f64 = 0.5;
 
 /// One contact interface.
 #[derive(Clone, Debug)]
@@ -443,6 +449,10 @@ impl Contribution for ContactInterfaces {
 
     fn jacobian(&self, at: &State, out: &mut dyn TangentSink) -> Result<Option<DomainIssue>> {
         Ok(self.tangent(at, out)?.map(DomainIssue::Contact))
+    }
+
+    fn step_fraction(&self, at: &State, du: &[f64]) -> f64 {
+        self.reach_fraction(at, du)
     }
 
     fn is_augmented(&self) -> bool {

@@ -4,7 +4,7 @@
 use super::coverage::traction_integrals;
 use super::deal::{deal_in_strips, pass_ranks};
 use super::evaluate::Linearize;
-use super::{coverage_fade, ContactInterfaces, FADE_COVERAGE, MIN_COVERAGE};
+use super::{coverage_fade, ContactInterfaces, FADE_COVERAGE, MIN_COVERAGE, PENETRATION_REACH};
 use crate::case::Scene;
 use crate::contact::mortar::RejectStats;
 use crate::contact::mortar::TractionScheme;
@@ -451,4 +451,38 @@ fn strips_split_along_the_longest_side_in_equal_counts() {
     assert!(deal_in_strips(&points, 1).iter().all(|&o| o == 0));
     let many = deal_in_strips(&points[..2], 4);
     assert_eq!(many, vec![0, 2]);
+}
+
+/// A Newton update that pushes the upper block of [`partly_covered_blocks`] (0.01 deep) down
+/// by `d` is shortened so that no node goes deeper than [`PENETRATION_REACH`] `h_A`
+/// (`h_A` = 0.25): to `(reach - 0.01) / d`. Updates that lift it, slide it or push it less
+/// deep are taken whole.
+#[test]
+fn an_update_stays_within_the_search_reach() {
+    let scene = partly_covered_blocks();
+    let contact = on_one_rank(&scene);
+    let u = vec![0.0; 3 * scene.mesh.num_nodes()];
+    let at = State {
+        scene: &scene,
+        u: &u,
+        t: 1.0,
+    };
+    let upper: Vec<usize> = (0..scene.mesh.num_nodes())
+        .filter(|&n| {
+            let z = scene.mesh.coords[n][2];
+            (z - 0.49).abs() < 1e-12 || z > 0.5 + 1e-12
+        })
+        .collect();
+    let moved = |c: usize, d: f64| {
+        let mut du = vec![0.0; u.len()];
+        upper.iter().for_each(|&n| du[3 * n + c] = d);
+        du
+    };
+    let reach = PENETRATION_REACH * 0.25;
+    let d = 2.0 * (reach - 0.01);
+    let fraction = contact.reach_fraction(&at, &moved(2, -d));
+    assert!((fraction - 0.5).abs() < 1e-12, "pushed down: {fraction}");
+    assert_eq!(contact.reach_fraction(&at, &moved(2, 0.5 * d)), 1.0);
+    assert_eq!(contact.reach_fraction(&at, &moved(2, -0.4 * d)), 1.0);
+    assert_eq!(contact.reach_fraction(&at, &moved(0, 0.3)), 1.0);
 }
