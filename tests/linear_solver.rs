@@ -25,7 +25,7 @@ use std::path::PathBuf;
 const MAX_LINEAR_PER_NEWTON: f64 = 60.0;
 
 /// The bound on the Newton iterations of the smallest level's run with the direct solve:
-/// measured 364 without a cut (17-27 per slide step, docs/performance.md, "Refinement").
+/// measured 363 without a cut (17-26 per slide step, docs/performance.md, "Refinement").
 const MAX_NEWTON_LEVEL_1: f64 = 400.0;
 
 /// The least normal contact force of a slide step, in units of that at the end of the

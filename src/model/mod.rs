@@ -257,7 +257,8 @@ pub trait Contribution {
     fn jacobian(&self, at: &State, out: &mut dyn TangentSink) -> Result<Option<DomainIssue>>;
 
     /// The largest fraction of the Newton update `du` (indexed as `at.u`) from `at` this
-    /// contribution accepts, in `(0, 1]`: contact keeps what its search sees within its reach.
+    /// contribution accepts (at most 1, above 0 for a finite update): contact keeps what its
+    /// search sees within its reach.
     fn step_fraction(&self, _at: &State, _du: &[f64]) -> f64 {
         1.0
     }

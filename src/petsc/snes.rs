@@ -116,7 +116,8 @@ fn options_error(options_source: &str, e: Error) -> Error {
 
 type ResidualFn<'a> = dyn FnMut(&Vector, &mut Vector) -> Result<(), CallbackError> + 'a;
 type JacobianFn<'a> = dyn FnMut(&Vector, &mut Matrix) -> Result<(), CallbackError> + 'a;
-/// `limit(x, y)`: the fraction (in `(0, 1]`) of the Newton update `-y` from `x` to take.
+/// `limit(x, y)`: the fraction (at most 1, above 0 for a finite update) of the Newton update
+/// `-y` from `x` to take.
 pub type StepLimitFn<'a> = dyn FnMut(&Vector, &Vector) -> Result<f64, CallbackError> + 'a;
 
 enum Failure {
@@ -292,8 +293,8 @@ impl Snes {
     }
 
     /// [`Snes::solve`], with every Newton update first shortened to the fraction
-    /// `step_limit(x, y)` of it (a pre-check of the line search: the full step, `bt` and `l2`
-    /// search along the shortened update).
+    /// `step_limit(x, y)` of it (a pre-check of the line search: `basic` and `bt` take at
+    /// most the shortened update, `l2` searches along it and may go beyond).
     pub fn solve_limited<'a>(
         &mut self,
         x: &mut Vector,
@@ -324,6 +325,14 @@ impl Snes {
             Some(jacobian_trampoline),
             ctx_ptr
         ))?;
+        let n = super::to_petsc_int(self.history.len())?;
+        chk!(SNESSetConvergenceHistory(
+            self.raw,
+            self.history.as_mut_ptr(),
+            std::ptr::null_mut(),
+            n,
+            p::PetscBool::PETSC_TRUE
+        ))?;
         let mut ls: p::SNESLineSearch = std::ptr::null_mut();
         chk!(SNESGetLineSearch(self.raw, &mut ls))?;
         if limited {
@@ -333,14 +342,6 @@ impl Snes {
                 ctx_ptr
             ))?;
         }
-        let n = super::to_petsc_int(self.history.len())?;
-        chk!(SNESSetConvergenceHistory(
-            self.raw,
-            self.history.as_mut_ptr(),
-            std::ptr::null_mut(),
-            n,
-            p::PetscBool::PETSC_TRUE
-        ))?;
         let solved = chk!(SNESSolve(self.raw, std::ptr::null_mut(), x.raw));
         // Detach the context: it lives on this stack frame only.
         if limited {

@@ -3,8 +3,8 @@
 //! A direct solve (LU through MUMPS) costs about `n^2` per factorization on these meshes and
 //! an iterative one (GMRES with multigrid and an exact solve on the interfaces' dofs) about
 //! `n` per iteration, with a bounded number of iterations: below [`DIRECT_BELOW`] free dofs the
-//! direct solve is at least as fast, from there on the iterative one is the cheaper per Newton
-//! iteration and in memory (docs/performance.md, "Refinement"). PETSc's `-ksp_type` or `-pc_type` options replace the choice.
+//! direct solve is at least as fast (docs/performance.md, "Refinement"), from there on the
+//! iterative one, whose memory and cost per linear iteration grow about as the dofs. PETSc's `-ksp_type` or `-pc_type` options replace the choice.
 
 use crate::case::Scene;
 use crate::dofs::DofMap;

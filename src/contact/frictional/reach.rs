@@ -9,17 +9,23 @@
 //! `p / eps_n`): the next update, without contact, moves the bodies by the whole load.
 //!
 //! So every Newton update is shortened, as a whole, to the fraction that keeps each held
-//! node's penetration within [`PENETRATION_REACH`] `h_A`, with the increment of its
+//! node's penetration within [`PENETRATION_REACH`] `h_A` (`r_A`), with the increment of its
 //! normal gap taken from the current weights (those of the residual at the iterate):
 //!
 //! ```text
 //! dgh_A = nu_A . (sum_B n1_AB du_B - sum_C n2_AC du_C) / a_A
-//! fraction = min over A of (PENETRATION_REACH h_A - gh_A) / dgh_A
-//!            where gh_A < PENETRATION_REACH h_A < gh_A + dgh_A
+//! fraction = min over A of max(r_A - gh_A, LEAST_DEEPENING r_A) / dgh_A
+//!            where gh_A < r_A < gh_A + dgh_A
 //! ```
 //!
-//! A node already deeper than the reach is left alone: its pairs hold it. Node-on-segment
-//! passes are not limited.
+//! A node may always go [`LEAST_DEEPENING`] `r_A` deeper, so that one just short of the
+//! reach does not shrink the update to nothing (a vanishing update would pass PETSc's test
+//! on the step length as converged); a node already deeper than the reach is left alone: its
+//! pairs hold it. Nodes covered less than the coverage that carries traction, and increments
+//! that are not finite, are not looked at (a non-finite update fails in the residual).
+//! Node-on-segment passes are not limited. The limit holds for the line searches that take
+//! at most the full update (`basic`, `bt`); `l2` may extrapolate beyond it, and the trust
+//! region method has no line search.
 
 use crate::case::ContactMethod;
 use crate::contact::mortar::RejectStats;
@@ -31,6 +37,9 @@ use super::pass::ContactPass;
 #[cfg(doc)]
 use super::EVAL_MARGIN;
 use super::{ContactInterfaces, PENETRATION_REACH};
+
+/// The least deepening an update may bring a node below the reach, in units of the reach.
+const LEAST_DEEPENING: f64 = 0.25;
 
 impl ContactInterfaces {
     /// The fraction of the Newton update `du` (indexed as `at.u`) from `at` that keeps every
@@ -70,9 +79,13 @@ impl ContactPass {
             };
             let (_, increment) = self.weighted_gap(&terms, dx);
             let dgh = dot(nu, increment) / kin.area;
+            if !dgh.is_finite() {
+                continue;
+            }
             let reach = PENETRATION_REACH * self.state[a].h;
             if law.gh < reach && law.gh + dgh > reach {
-                fraction = fraction.min((reach - law.gh) / dgh);
+                let deepening = (reach - law.gh).max(LEAST_DEEPENING * reach);
+                fraction = fraction.min(deepening / dgh);
             }
         }
         fraction
