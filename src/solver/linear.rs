@@ -4,7 +4,8 @@
 //! an iterative one (GMRES with multigrid and an exact solve on the interfaces' dofs) about
 //! `n` per iteration, with a bounded number of iterations: below [`DIRECT_BELOW`] free dofs the
 //! direct solve is at least as fast (docs/performance.md, "Refinement"), from there on the
-//! iterative one, whose memory and cost per linear iteration grow about as the dofs. PETSc's `-ksp_type` or `-pc_type` options replace the choice.
+//! iterative one, whose memory and cost per linear iteration grow about as the dofs. PETSc's
+//! `-ksp_type` or `-pc_type` options replace the choice.
 
 use crate::case::Scene;
 use crate::dofs::DofMap;
