@@ -37,8 +37,11 @@ fn compressed_block_one_and_two_ranks_agree() {
 /// 1 and 2 ranks give the same frictional slide (displacements to 1e-8 relative), also with
 /// the sides swapped (partly covered secondary nodes, some fading out), and the same
 /// segment-pair and quadrature-point counts (the test fails when every rank counts the faces it
-/// integrates). Nodes whose trial starts a step on the Coulomb cone take the first tangent
-/// `contact::law::CONE_TIE` settles, not one round-off picks on one rank count only.
+/// integrates). With the sides swapped the contact zone moves over the secondary surface, and
+/// the 2-rank deal of its nodes by work moves with it: a node changes rank between steps, its
+/// multipliers and history handed over (the test fails when they are not). Nodes whose trial
+/// starts a step on the Coulomb cone take the first tangent `contact::law::CONE_TIE` settles,
+/// not one round-off picks on one rank count only.
 #[test]
 fn contact_one_and_two_ranks_agree() {
     for (name, text) in [

@@ -14,10 +14,10 @@ use super::pass::NodeState;
 use super::{ContactInterfaces, FORCE_SUMS};
 
 /// Values per traction node in the record `contact node states`.
-const NODE_VALUES: usize = 20;
+pub(super) const NODE_VALUES: usize = 20;
 
 /// `segment_old` absent.
-const NO_SEGMENT: u64 = u64::MAX;
+pub(super) const NO_SEGMENT: u64 = u64::MAX;
 
 impl ContactInterfaces {
     pub(super) fn write_carried(&self, out: &mut dyn StateSink) {
@@ -105,7 +105,7 @@ impl ContactInterfaces {
 }
 
 /// A node's state as [`NODE_VALUES`] numbers (its face of `segment_old` apart).
-fn node_values(s: &NodeState) -> [f64; NODE_VALUES] {
+pub(super) fn node_values(s: &NodeState) -> [f64; NODE_VALUES] {
     let h = &s.history;
     let gap = s.gap_old.unwrap_or_default();
     let xi = s.segment_old.map_or([0.0; 2], |(_, xi)| xi);
@@ -134,7 +134,7 @@ fn node_values(s: &NodeState) -> [f64; NODE_VALUES] {
 }
 
 /// The inverse of [`node_values`].
-fn set_node_values(s: &mut NodeState, v: &[f64], face: u64) {
+pub(super) fn set_node_values(s: &mut NodeState, v: &[f64], face: u64) {
     let h = &mut s.history;
     h.lambda_n = v[0];
     h.lambda_t = [v[1], v[2], v[3]];

@@ -126,6 +126,11 @@ impl StateLog {
         Ok(())
     }
 
+    /// Sets the state codes of every node (a new deal of the nodes to the ranks).
+    pub(crate) fn set_states(&mut self, codes: &[u64]) {
+        self.states = codes.iter().map(|&c| c as u8).collect();
+    }
+
     /// A load step (or a cut step's new attempt) starts: its count restarts.
     pub(crate) fn start_step(&mut self) {
         self.step = StateChanges::default();

@@ -1,5 +1,17 @@
 //! Which rank does the contact work of which traction node (module docs, "Parallel layout").
 
+use mpi::collective::{CommunicatorCollectives, SystemOperation};
+use mpi::topology::SimpleCommunicator;
+
+use super::carried::{node_values, set_node_values, NODE_VALUES, NO_SEGMENT};
+use super::pass::ContactPass;
+use super::{ContactInterfaces, EVAL_MARGIN};
+
+/// The work of a traction node none of whose faces has a candidate pair, in pairs: enough
+/// that a surface out of contact is dealt in equal counts, too little to matter beside a
+/// node in contact.
+pub(crate) const IDLE_NODE_WORK: f64 = 1e-3;
+
 /// The ranks that share the contact work of pass `pass` of `passes`: the passes of an
 /// interface are dealt out first, so that on two ranks the two passes of a two-pass interface
 /// go one to each rank whole (no face is integrated twice); with more ranks than passes, each
@@ -15,11 +27,10 @@ pub(crate) fn pass_ranks(pass: usize, passes: usize, ranks: usize) -> std::ops::
 
 /// The strip (of `strips`) that does the contact work of each traction node: the nodes, sorted
 /// along the longest side of their bounding box (reference positions; ties by index), cut into
-/// `strips` strips of equal counts. The faces next to each cut (one row of faces, or two when
-/// the cut falls inside a row of nodes) are integrated by both neighbours. Equal counts are
-/// equal work when the whole surface is in contact; a contact zone smaller than the surface
-/// may fall in one strip.
-pub(crate) fn deal_in_strips(points: &[[f64; 3]], strips: usize) -> Vec<usize> {
+/// `strips` strips of equal work, each node's work given by `work`: a node goes to the strip in
+/// which the work of the nodes before it ends. The faces next to each cut (one row of faces,
+/// or two when the cut falls inside a row of nodes) are integrated by both neighbours.
+pub(crate) fn deal_in_strips(points: &[[f64; 3]], work: &[f64], strips: usize) -> Vec<usize> {
     let extent: [f64; 3] = std::array::from_fn(|c| {
         let (lo, hi) = points
             .iter()
@@ -34,47 +45,115 @@ pub(crate) fn deal_in_strips(points: &[[f64; 3]], strips: usize) -> Vec<usize> {
         .unwrap_or(0);
     let mut order: Vec<usize> = (0..points.len()).collect();
     order.sort_by(|&a, &b| points[a][axis].total_cmp(&points[b][axis]).then(a.cmp(&b)));
+    let total: f64 = work.iter().sum();
     let mut strip = vec![0; points.len()];
-    for (position, &a) in order.iter().enumerate() {
-        strip[a] = position * strips / points.len();
+    let mut before = 0.0;
+    for &a in &order {
+        strip[a] = ((strips as f64 * before / total) as usize).min(strips - 1);
+        before += work[a];
     }
     strip
 }
 
-/// The contact work of one pass that falls to one rank.
-pub(crate) struct Work {
-    /// The traction nodes it holds (indices into the pass's nodes).
-    pub held: Vec<usize>,
-    /// The secondary faces carrying a node it holds (the faces it integrates).
-    pub faces: Vec<usize>,
-    /// Per secondary face: whether it holds the face's first traction node (and so counts
-    /// the face's pair statistics).
-    pub tallied: Vec<bool>,
+/// The work of each of `nodes` traction nodes: every secondary face's candidate pairs
+/// (`pairs`, per face) shared equally among its traction nodes (`carriers`), plus
+/// [`IDLE_NODE_WORK`].
+pub(crate) fn node_work(carriers: &[Vec<usize>], pairs: &[usize], nodes: usize) -> Vec<f64> {
+    let mut work = vec![IDLE_NODE_WORK; nodes];
+    for (carried, &count) in carriers.iter().zip(pairs) {
+        for &a in carried {
+            work[a] += count as f64 / carried.len() as f64;
+        }
+    }
+    work
 }
 
-impl Work {
-    /// Deals the traction nodes at reference positions `points` in strips to the ranks
-    /// `workers` ([`deal_in_strips`]); the share of `rank`. `carriers`: per secondary face,
-    /// its traction nodes.
-    pub fn dealt(
-        points: &[[f64; 3]],
-        carriers: &[Vec<usize>],
-        workers: std::ops::Range<usize>,
-        rank: usize,
-    ) -> Work {
-        let holder: Vec<usize> = deal_in_strips(points, workers.len())
-            .into_iter()
-            .map(|strip| workers.start + strip)
+impl ContactPass {
+    /// Deals the pass's traction nodes to its ranks by their work at positions `x`
+    /// ([`node_work`] of the candidate pairs the evaluations' search finds there, in strips by
+    /// [`deal_in_strips`]): what this rank holds, integrates and tallies.
+    pub(crate) fn deal(&mut self, x: &[[f64; 3]]) {
+        let all_faces: Vec<usize> = (0..self.sec_faces.len()).collect();
+        let pairs: Vec<usize> = self
+            .candidates(x, &all_faces, EVAL_MARGIN)
+            .iter()
+            .map(|(_, ms)| ms.len())
             .collect();
-        Work {
-            held: (0..points.len()).filter(|&a| holder[a] == rank).collect(),
-            faces: (0..carriers.len())
-                .filter(|&s| carriers[s].iter().any(|&a| holder[a] == rank))
-                .collect(),
-            tallied: carriers
-                .iter()
-                .map(|c| c.first().is_some_and(|&a| holder[a] == rank))
-                .collect(),
+        let work = node_work(&self.carriers, &pairs, self.nodes.len());
+        let holder: Vec<usize> = deal_in_strips(&self.reference, &work, self.workers.len())
+            .into_iter()
+            .map(|strip| self.workers.start + strip)
+            .collect();
+        let rank = self.rank;
+        self.held = (0..self.nodes.len())
+            .filter(|&a| holder[a] == rank)
+            .collect();
+        self.local_faces = (0..self.carriers.len())
+            .filter(|&s| self.carriers[s].iter().any(|&a| holder[a] == rank))
+            .collect();
+        self.tallied = self
+            .carriers
+            .iter()
+            .map(|c| c.first().is_some_and(|&a| holder[a] == rank))
+            .collect();
+        self.last_values.replace(None);
+    }
+
+    /// Whether more than one rank shares the pass (and a new deal may move its nodes).
+    pub(crate) fn is_shared(&self) -> bool {
+        self.workers.len() > 1
+    }
+
+    /// Hands every rank the state of every traction node (*collective*): each node's
+    /// multipliers and history, and its law state at the last tangent evaluation, as the rank
+    /// holding it keeps them. Before a new deal, which may move a node to another rank.
+    pub(crate) fn share_held_state(&mut self, world: &SimpleCommunicator) {
+        let n = self.nodes.len();
+        let mut values = vec![0.0; NODE_VALUES * n];
+        let mut codes = vec![0u64; 2 * n];
+        let log_codes = self.state_log.borrow().to_codes();
+        for &a in &self.held {
+            let st = &self.state[a];
+            values[NODE_VALUES * a..NODE_VALUES * (a + 1)].copy_from_slice(&node_values(st));
+            // (Zero stands for "not held here" in the sum; a face is sent as its index + 1.)
+            codes[a] = st.segment_old.map_or(0, |(f, _)| f as u64 + 1);
+            codes[n + a] = log_codes.get(a).copied().unwrap_or(0);
+        }
+        let mut all_values = vec![0.0; values.len()];
+        let mut all_codes = vec![0u64; codes.len()];
+        world.all_reduce_into(&values[..], &mut all_values[..], SystemOperation::sum());
+        world.all_reduce_into(&codes[..], &mut all_codes[..], SystemOperation::sum());
+        for (a, st) in self.state.iter_mut().enumerate() {
+            let face = all_codes[a].checked_sub(1).unwrap_or(NO_SEGMENT);
+            set_node_values(
+                st,
+                &all_values[NODE_VALUES * a..NODE_VALUES * (a + 1)],
+                face,
+            );
+        }
+        self.state_log.borrow_mut().set_states(&all_codes[n..]);
+    }
+}
+
+impl ContactInterfaces {
+    /// Deals the traction nodes of every shared pass anew by their work at the last converged
+    /// positions (*collective*), each rank first handed the state of every node.
+    pub(crate) fn redeal(&mut self, world: &SimpleCommunicator) {
+        for pass in self.interfaces.iter_mut().flat_map(|i| &mut i.passes) {
+            if pass.is_shared() {
+                pass.share_held_state(world);
+                self.timings.search.time(|| pass.deal(&self.x_old));
+            }
+        }
+    }
+
+    /// The deal [`ContactInterfaces::redeal`] made after the last converged step, again (a
+    /// restart, whose checkpoint holds the state of every node).
+    pub(crate) fn deal_as_committed(&mut self) {
+        for pass in self.interfaces.iter_mut().flat_map(|i| &mut i.passes) {
+            if pass.is_shared() {
+                pass.deal(&self.x_old);
+            }
         }
     }
 }

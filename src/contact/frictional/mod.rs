@@ -142,8 +142,16 @@
 //! partition: METIS balances elements, and a partition whose cut does not cross the interface
 //! leaves the whole surface to one rank. The passes of an interface are dealt to blocks of
 //! ranks (`pass_ranks`: on two ranks each pass of a two-pass interface goes whole to one rank),
-//! and each pass's nodes are cut into strips of equal counts along the longest side of the
-//! secondary surface, one strip per rank of its block (`deal_in_strips`).
+//! and each pass's nodes are cut into strips of equal work along the longest side of the
+//! secondary surface, one strip per rank of its block (`deal_in_strips`). A node's work is
+//! its share of the candidate pairs of the faces carrying it (`node_work`: a face's pairs split
+//! equally among its traction nodes), found by the evaluations' search; a node without pairs
+//! weighs little, so that the ranks share the part of the surface in contact, not the surface.
+//! The nodes are dealt at the reference configuration and again after every converged step, at
+//! its positions: the contact zone moves with the load. Before a new deal, every rank is handed
+//! the multipliers, history and last law state of every node (`share_held_state`), so a node
+//! that changes rank carries them along; a checkpoint thus holds every node's state, and a
+//! restart deals as the run did from the positions it read back.
 //!
 //! The rank holding a traction node computes everything of that node and keeps its Uzawa
 //! multipliers and history: it integrates every face pair whose secondary face carries a node it
@@ -488,6 +496,7 @@ impl Contribution for ContactInterfaces {
             .map(|(changes, _)| changes.total())
             .collect();
         self.close_step(at);
+        self.redeal(world);
     }
 
     fn write_state(&self, out: &mut dyn StateSink) {
@@ -495,7 +504,9 @@ impl Contribution for ContactInterfaces {
     }
 
     fn read_state(&mut self, from: &mut dyn StateSource) -> Result<()> {
-        self.read_carried(from)
+        self.read_carried(from)?;
+        self.deal_as_committed();
+        Ok(())
     }
 
     fn is_frictional(&self) -> bool {

@@ -15,7 +15,6 @@ use crate::mesh::FaceRef;
 
 use super::changes::StateLog;
 use super::coverage::full_integrals;
-use super::deal::Work;
 use super::evaluate::ValuesAt;
 
 /// The state of one traction node that persists between Newton solves.
@@ -49,11 +48,18 @@ pub struct ContactPass {
     pub(crate) carriers: Vec<Vec<usize>>,
     /// Per traction node: the secondary faces carrying it, with its index `k` in each.
     pub(crate) node_faces: Vec<Vec<(usize, usize)>>,
-    /// Per traction node. The multipliers and history (`history`, `gap_old`, `segment_old`)
-    /// are kept only by the rank holding the node; elsewhere they stay as they started. (The
-    /// node-on-segment pattern reads `segment_old` on every rank: a row owned by another rank
-    /// may then miss the old face's columns, which costs PETSc a reallocation, not an error.)
+    /// Per traction node. Within a step the multipliers and history (`history`, `gap_old`,
+    /// `segment_old`) are kept only by the rank holding the node; after every converged step
+    /// each rank sharing the pass is handed every node's (`share_held_state`), and on the
+    /// ranks outside the pass's block they stay as they started. (The node-on-segment pattern
+    /// reads `segment_old` on every rank: a row owned by a rank outside the block may then
+    /// miss the old face's columns, which costs PETSc a reallocation, not an error.)
     pub state: Vec<NodeState>,
+    /// Per traction node: its reference position (along which the nodes are dealt).
+    pub(crate) reference: Vec<[f64; 3]>,
+    /// The ranks that share the pass's contact work, and this rank.
+    pub(crate) workers: std::ops::Range<usize>,
+    pub(crate) rank: usize,
     /// Secondary faces that carry a node this rank holds (the faces it integrates).
     pub(crate) local_faces: Vec<usize>,
     /// The traction nodes this rank holds: it does their contact work and keeps their
@@ -119,9 +125,8 @@ impl ContactPass {
                 ..Default::default()
             })
             .collect();
-        let points: Vec<[f64; 3]> = nodes.iter().map(|&n| mesh.coords[n]).collect();
-        let work = Work::dealt(&points, &carriers, workers, dofs.rank);
-        Ok(ContactPass {
+        let reference: Vec<[f64; 3]> = nodes.iter().map(|&n| mesh.coords[n]).collect();
+        let mut pass = ContactPass {
             secondary: sec.to_vec(),
             node_faces: faces_of_nodes(&carriers, nodes.len()),
             symmetry: symmetry_of(scene, &sec_faces),
@@ -131,13 +136,18 @@ impl ContactPass {
             nodes,
             carriers,
             state,
-            local_faces: work.faces,
-            held: work.held,
-            tallied: work.tallied,
+            reference,
+            workers,
+            rank: dofs.rank,
+            local_faces: Vec::new(),
+            held: Vec::new(),
+            tallied: Vec::new(),
             method: iface.method,
             last_values: RefCell::new(None),
             state_log: RefCell::new(StateLog::default()),
-        })
+        };
+        pass.deal(&mesh.coords);
+        Ok(pass)
     }
 
     /// The law's parameters at a node: its penalties times the interface's growth factor

@@ -2,7 +2,7 @@
 //! a tangent, the coverage fade, the traction integrals, and the dealing of work to ranks.
 
 use super::coverage::traction_integrals;
-use super::deal::{deal_in_strips, pass_ranks};
+use super::deal::{deal_in_strips, node_work, pass_ranks};
 use super::evaluate::Linearize;
 use super::{coverage_fade, ContactInterfaces, FADE_COVERAGE, MIN_COVERAGE, PENETRATION_REACH};
 use crate::case::Scene;
@@ -411,7 +411,7 @@ fn every_node_is_held_by_exactly_one_rank() {
             for (pass, held) in held_by_pass.iter_mut().enumerate() {
                 let workers = pass_ranks(pass, passes, ranks);
                 assert!(!workers.is_empty() && workers.end <= ranks);
-                let strips = deal_in_strips(&points, workers.len());
+                let strips = deal_in_strips(&points, &vec![1.0; points.len()], workers.len());
                 let mut counts = vec![0usize; workers.len()];
                 for &s in &strips {
                     counts[s] += 1;
@@ -428,7 +428,7 @@ fn every_node_is_held_by_exactly_one_rank() {
             assert_eq!(used.len(), ranks);
         }
     }
-    assert!(deal_in_strips(&[], 3).is_empty());
+    assert!(deal_in_strips(&[], &[], 3).is_empty());
 }
 
 #[test]
@@ -437,7 +437,7 @@ fn strips_split_along_the_longest_side_in_equal_counts() {
     let points: Vec<[f64; 3]> = (0..15)
         .map(|i| [(i % 3) as f64, (i / 3) as f64, 1.0])
         .collect();
-    let owner = deal_in_strips(&points, 2);
+    let owner = deal_in_strips(&points, &[1.0; 15], 2);
     let counts = [0, 1].map(|r| owner.iter().filter(|&&o| o == r).count());
     assert_eq!(counts, [8, 7]);
     for (p, &o) in points.iter().zip(&owner) {
@@ -448,9 +448,26 @@ fn strips_split_along_the_longest_side_in_equal_counts() {
         }
     }
     // One rank holds everything; more ranks than points leave some empty.
-    assert!(deal_in_strips(&points, 1).iter().all(|&o| o == 0));
-    let many = deal_in_strips(&points[..2], 4);
+    assert!(deal_in_strips(&points, &[1.0; 15], 1)
+        .iter()
+        .all(|&o| o == 0));
+    let many = deal_in_strips(&points[..2], &[1.0; 2], 4);
     assert_eq!(many, vec![0, 2]);
+}
+
+#[test]
+fn strips_cut_where_the_work_is_halved() {
+    // Ten nodes along x; the last four carry the contact (work 10 each), the others idle.
+    let points: Vec<[f64; 3]> = (0..10).map(|i| [i as f64, 0.0, 0.0]).collect();
+    let idle = 1e-3;
+    let work: Vec<f64> = (0..10).map(|i| if i < 6 { idle } else { 10.0 }).collect();
+    let owner = deal_in_strips(&points, &work, 2);
+    assert_eq!(owner, [0, 0, 0, 0, 0, 0, 0, 0, 1, 1]);
+    // The work of a face is shared among its traction nodes, on top of the idle work.
+    let carriers = vec![vec![0, 1], vec![1, 2, 3, 4]];
+    let shares = node_work(&carriers, &[3, 8], 5);
+    let expected = [1.5, 3.5, 2.0, 2.0, 2.0].map(|w| w + super::deal::IDLE_NODE_WORK);
+    assert_eq!(shares, expected);
 }
 
 /// A Newton update that pushes the upper block of [`partly_covered_blocks`] (0.01 deep) down
@@ -485,4 +502,109 @@ fn an_update_stays_within_the_search_reach() {
     assert_eq!(contact.reach_fraction(&at, &moved(2, 0.5 * d)), 1.0);
     assert_eq!(contact.reach_fraction(&at, &moved(2, -0.4 * d)), 1.0);
     assert_eq!(contact.reach_fraction(&at, &moved(0, 0.3)), 1.0);
+}
+
+/// The records of a checkpoint, kept in memory.
+#[derive(Default)]
+struct Records(std::collections::VecDeque<(String, Vec<f64>, Vec<u64>)>);
+
+impl crate::model::StateSink for Records {
+    fn f64s(&mut self, name: &str, values: &[f64]) {
+        self.0
+            .push_back((name.to_string(), values.to_vec(), Vec::new()));
+    }
+    fn u64s(&mut self, name: &str, values: &[u64]) {
+        self.0
+            .push_back((name.to_string(), Vec::new(), values.to_vec()));
+    }
+}
+
+impl crate::model::StateSource for Records {
+    fn f64s(&mut self, name: &str) -> crate::error::Result<Vec<f64>> {
+        let (written, values, _) = self.0.pop_front().unwrap();
+        assert_eq!(written, name);
+        Ok(values)
+    }
+    fn u64s(&mut self, name: &str) -> crate::error::Result<Vec<u64>> {
+        let (written, _, values) = self.0.pop_front().unwrap();
+        assert_eq!(written, name);
+        Ok(values)
+    }
+}
+
+/// On two ranks the secondary surface of [`partly_covered_blocks`] (5 x 5 traction nodes, the
+/// column at x = 0 out of reach of the upper block) is dealt by the work of its candidate
+/// pairs, not by counts: each rank's work is within one node's of the other's. After the
+/// upper block slid by -0.4 along x and the step closed, the new deal follows the contact;
+/// interfaces made afresh that read the committed state back (a restart) deal alike.
+#[test]
+fn the_deal_follows_the_contact_and_a_restart_deals_alike() {
+    use crate::model::Contribution;
+    let scene = partly_covered_blocks();
+    let mesh = &scene.mesh;
+    let up = mesh.bodies.iter().position(|b| b == "up").unwrap();
+    let on_rank = |rank| {
+        let elements = vec![0; mesh.num_elements()];
+        let dofs = DofMap::new(mesh, elements, rank, 2, &scene.constrained_mask());
+        ContactInterfaces::new(&scene, &dofs).unwrap()
+    };
+    // Per rank: the nodes it holds and their work at positions `x`.
+    let shares = |ranks: &[ContactInterfaces], x: &[[f64; 3]]| -> Vec<(Vec<usize>, f64)> {
+        ranks
+            .iter()
+            .map(|c| {
+                let pass = &c.interfaces[0].passes[0];
+                let faces: Vec<usize> = (0..pass.sec_faces.len()).collect();
+                let pairs: Vec<usize> = pass
+                    .candidates(x, &faces, super::EVAL_MARGIN)
+                    .iter()
+                    .map(|(_, ms)| ms.len())
+                    .collect();
+                let work = node_work(&pass.carriers, &pairs, pass.nodes.len());
+                let mine = pass.held.iter().map(|&a| work[a]).sum();
+                (pass.held.clone(), mine)
+            })
+            .collect()
+    };
+    let balanced = |dealt: &[(Vec<usize>, f64)], what: &str| {
+        let mut all: Vec<usize> = dealt.iter().flat_map(|(h, _)| h.clone()).collect();
+        all.sort_unstable();
+        assert_eq!(all, (0..25).collect::<Vec<_>>(), "{what}: held once each");
+        // The most work one node carries here: a quarter of four faces' pairs.
+        let node = 4.0;
+        assert!((dealt[0].1 - dealt[1].1).abs() <= node, "{what}: {dealt:?}");
+    };
+    let mut ranks = [on_rank(0), on_rank(1)];
+    let start = shares(&ranks, &mesh.coords);
+    balanced(&start, "reference");
+    assert!(start[0].0.len() > 13, "not dealt by counts: {start:?}");
+
+    let mut u = vec![0.0; 3 * mesh.num_nodes()];
+    for e in (0..mesh.num_elements()).filter(|&e| mesh.body[e] == up) {
+        for &n in mesh.element_nodes(e) {
+            u[3 * n] = -0.4;
+        }
+    }
+    let at = State {
+        scene: &scene,
+        u: &u,
+        t: 1.0,
+    };
+    for c in &mut ranks {
+        c.close_step(&at);
+        c.deal_as_committed();
+    }
+    let slid = shares(&ranks, &at.positions());
+    balanced(&slid, "slid");
+    assert_ne!(slid[0].0, start[0].0, "the deal moved with the contact");
+
+    for (rank, c) in ranks.iter().enumerate() {
+        let mut records = Records::default();
+        c.write_state(&mut records);
+        let mut restarted = on_rank(rank);
+        restarted.read_state(&mut records).unwrap();
+        let pass = &restarted.interfaces[0].passes[0];
+        assert_eq!(pass.held, slid[rank].0, "restarted rank {rank}");
+        assert_eq!(pass.local_faces, c.interfaces[0].passes[0].local_faces);
+    }
 }
