@@ -80,7 +80,8 @@ impl AddAssign for StateChanges {
 /// counted so far.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct StateLog {
-    /// Per traction node of the pass (only the held ones are written): its state code.
+    /// Per traction node of the pass: its state code (written for the held nodes at each
+    /// tangent evaluation, for every node at a new deal).
     states: Vec<u8>,
     /// The changes of the last tangent evaluation.
     pub(crate) last: StateChanges,
@@ -126,9 +127,29 @@ impl StateLog {
         Ok(())
     }
 
-    /// Sets the state codes of every node (a new deal of the nodes to the ranks).
+    /// Sets the state codes of every node (before a new deal of the nodes to the ranks).
     pub(crate) fn set_states(&mut self, codes: &[u64]) {
         self.states = codes.iter().map(|&c| c as u8).collect();
+    }
+
+    /// The state code of node `a` (open when none was recorded).
+    pub(crate) fn state(&self, a: usize) -> u64 {
+        self.states.get(a).map_or(0, |&c| u64::from(c))
+    }
+
+    /// The nodes this rank holds are now `held` (a new deal): the last evaluation's changes
+    /// and pressed counts become those of the held nodes, so that their sums over the ranks
+    /// stay those of every node (no rank keeps counts of nodes it gave away).
+    pub(crate) fn dealt(&mut self, held: &[usize]) {
+        self.last = StateChanges::default();
+        let mut pressed = [0u64; 2];
+        for &a in held {
+            match self.state(a) {
+                0 => {}
+                code => pressed[(code - 1) as usize] += 1,
+            }
+        }
+        self.pressed = pressed;
     }
 
     /// A load step (or a cut step's new attempt) starts: its count restarts.
@@ -214,5 +235,21 @@ mod tests {
         assert_eq!(log.last.total(), 0);
         assert_eq!(log.step.total(), 0);
         assert_eq!(StateChanges::from_array(expected.to_array()), expected);
+    }
+
+    /// After a new deal a rank counts only the nodes it holds now: over two ranks, every
+    /// pressed node once, and no change left over from nodes given away.
+    #[test]
+    fn a_new_deal_counts_the_pressed_nodes_held_now() {
+        let mut log = StateLog::default();
+        log.record(4, [(0, 1), (1, 2), (2, 2), (3, 0)]);
+        assert_eq!((log.pressed, log.last.total()), ([1, 2], 3));
+        let mut other = log.clone();
+        log.dealt(&[0, 3]);
+        other.dealt(&[1, 2]);
+        assert_eq!((log.pressed, other.pressed), ([1, 0], [0, 2]));
+        assert_eq!(log.last.total() + other.last.total(), 0);
+        assert_eq!(log.step.total(), 3, "the step's count is kept");
+        assert_eq!((log.state(2), log.state(9)), (2, 0));
     }
 }

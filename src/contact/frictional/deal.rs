@@ -45,12 +45,17 @@ pub(crate) fn deal_in_strips(points: &[[f64; 3]], work: &[f64], strips: usize) -
         .unwrap_or(0);
     let mut order: Vec<usize> = (0..points.len()).collect();
     order.sort_by(|&a, &b| points[a][axis].total_cmp(&points[b][axis]).then(a.cmp(&b)));
-    let total: f64 = work.iter().sum();
+    debug_assert_eq!(work.len(), points.len());
+    let strips = strips.max(1);
+    // (No work to share, or a work that is not a number: equal counts.)
+    let by_work = work.iter().sum::<f64>() > 0.0;
+    let weight = |a: usize| if by_work { work[a] } else { 1.0 };
+    let total: f64 = (0..points.len()).map(weight).sum();
     let mut strip = vec![0; points.len()];
     let mut before = 0.0;
     for &a in &order {
         strip[a] = ((strips as f64 * before / total) as usize).min(strips - 1);
-        before += work[a];
+        before += weight(a);
     }
     strip
 }
@@ -97,6 +102,7 @@ impl ContactPass {
             .map(|c| c.first().is_some_and(|&a| holder[a] == rank))
             .collect();
         self.last_values.replace(None);
+        self.state_log.borrow_mut().dealt(&self.held);
     }
 
     /// Whether more than one rank shares the pass (and a new deal may move its nodes).
@@ -111,14 +117,15 @@ impl ContactPass {
         let n = self.nodes.len();
         let mut values = vec![0.0; NODE_VALUES * n];
         let mut codes = vec![0u64; 2 * n];
-        let log_codes = self.state_log.borrow().to_codes();
+        let log = self.state_log.borrow();
         for &a in &self.held {
             let st = &self.state[a];
             values[NODE_VALUES * a..NODE_VALUES * (a + 1)].copy_from_slice(&node_values(st));
             // (Zero stands for "not held here" in the sum; a face is sent as its index + 1.)
             codes[a] = st.segment_old.map_or(0, |(f, _)| f as u64 + 1);
-            codes[n + a] = log_codes.get(a).copied().unwrap_or(0);
+            codes[n + a] = log.state(a);
         }
+        drop(log);
         let mut all_values = vec![0.0; values.len()];
         let mut all_codes = vec![0u64; codes.len()];
         world.all_reduce_into(&values[..], &mut all_values[..], SystemOperation::sum());

@@ -150,8 +150,8 @@
 //! The nodes are dealt at the reference configuration and again after every converged step, at
 //! its positions: the contact zone moves with the load. Before a new deal, every rank is handed
 //! the multipliers, history and last law state of every node (`share_held_state`), so a node
-//! that changes rank carries them along; a checkpoint thus holds every node's state, and a
-//! restart deals as the run did from the positions it read back.
+//! that changes rank carries them along; a checkpoint of a rank sharing a pass thus holds every
+//! node's state, and a restart deals as the run did from the positions it read back.
 //!
 //! The rank holding a traction node computes everything of that node and keeps its Uzawa
 //! multipliers and history: it integrates every face pair whose secondary face carries a node it

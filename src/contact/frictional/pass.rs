@@ -49,11 +49,12 @@ pub struct ContactPass {
     /// Per traction node: the secondary faces carrying it, with its index `k` in each.
     pub(crate) node_faces: Vec<Vec<(usize, usize)>>,
     /// Per traction node. Within a step the multipliers and history (`history`, `gap_old`,
-    /// `segment_old`) are kept only by the rank holding the node; after every converged step
-    /// each rank sharing the pass is handed every node's (`share_held_state`), and on the
-    /// ranks outside the pass's block they stay as they started. (The node-on-segment pattern
-    /// reads `segment_old` on every rank: a row owned by a rank outside the block may then
-    /// miss the old face's columns, which costs PETSc a reallocation, not an error.)
+    /// `segment_old`) are kept only by the rank holding the node. A pass shared by several
+    /// ranks hands every rank every node's after each converged step (`share_held_state`);
+    /// the state of a pass one rank does stays as it started on the other ranks. (The
+    /// node-on-segment pattern reads `segment_old` on every rank: for such a pass a row owned
+    /// by another rank may then miss the old face's columns, which costs PETSc a
+    /// reallocation, not an error.)
     pub state: Vec<NodeState>,
     /// Per traction node: its reference position (along which the nodes are dealt).
     pub(crate) reference: Vec<[f64; 3]>,
@@ -76,7 +77,8 @@ pub struct ContactPass {
     pub(crate) surface_nodes: Vec<usize>,
     /// The last values-only integration (`ContactPass::values_at`).
     pub(crate) last_values: RefCell<Option<ValuesAt>>,
-    /// The held nodes' law states at the last tangent evaluation, and their changes.
+    /// The law states at the last tangent evaluation (of the held nodes; of every node after a
+    /// new deal), and their changes.
     pub(crate) state_log: RefCell<StateLog>,
 }
 
