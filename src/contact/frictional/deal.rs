@@ -5,7 +5,7 @@ use mpi::topology::SimpleCommunicator;
 
 use super::carried::{node_values, set_node_values, NODE_VALUES, NO_SEGMENT};
 use super::pass::ContactPass;
-use super::{ContactInterfaces, EVAL_MARGIN};
+use super::{ContactInterface, ContactInterfaces, EVAL_MARGIN};
 
 /// The work of a traction node none of whose faces has a candidate pair, in pairs: enough
 /// that a surface out of contact is dealt in equal counts, too little to matter beside a
@@ -74,17 +74,27 @@ pub(crate) fn node_work(carriers: &[Vec<usize>], pairs: &[usize], nodes: usize) 
 }
 
 impl ContactPass {
-    /// Deals the pass's traction nodes to its ranks by their work at positions `x`
-    /// ([`node_work`] of the candidate pairs the evaluations' search finds there, in strips by
-    /// [`deal_in_strips`]): what this rank holds, integrates and tallies.
-    pub(crate) fn deal(&mut self, x: &[[f64; 3]]) {
+    /// The work of each traction node at positions `x`: [`node_work`] of the candidate pairs
+    /// the evaluations' search finds there.
+    pub(crate) fn node_work_at(&self, x: &[[f64; 3]]) -> Vec<f64> {
         let all_faces: Vec<usize> = (0..self.sec_faces.len()).collect();
         let pairs: Vec<usize> = self
             .candidates(x, &all_faces, EVAL_MARGIN)
             .iter()
             .map(|(_, ms)| ms.len())
             .collect();
-        let work = node_work(&self.carriers, &pairs, self.nodes.len());
+        node_work(&self.carriers, &pairs, self.nodes.len())
+    }
+
+    /// Deals the pass's traction nodes to its ranks by their work at positions `x`
+    /// ([`ContactPass::node_work_at`], in strips by [`deal_in_strips`]): what this rank holds,
+    /// integrates and tallies. (A pass one rank does needs no search: it holds every node.)
+    pub(crate) fn deal(&mut self, x: &[[f64; 3]]) {
+        let work = if self.is_shared() {
+            self.node_work_at(x)
+        } else {
+            vec![IDLE_NODE_WORK; self.nodes.len()]
+        };
         let holder: Vec<usize> = deal_in_strips(&self.reference, &work, self.workers.len())
             .into_iter()
             .map(|strip| self.workers.start + strip)
@@ -149,18 +159,27 @@ impl ContactInterfaces {
         for pass in self.interfaces.iter_mut().flat_map(|i| &mut i.passes) {
             if pass.is_shared() {
                 pass.share_held_state(world);
-                self.timings.search.time(|| pass.deal(&self.x_old));
             }
         }
+        let (interfaces, x_old) = (&mut self.interfaces, &self.x_old);
+        self.timings
+            .search
+            .time(|| deal_shared_passes(interfaces, x_old));
     }
 
     /// The deal [`ContactInterfaces::redeal`] made after the last converged step, again (a
     /// restart, whose checkpoint holds the state of every node).
     pub(crate) fn deal_as_committed(&mut self) {
-        for pass in self.interfaces.iter_mut().flat_map(|i| &mut i.passes) {
-            if pass.is_shared() {
-                pass.deal(&self.x_old);
-            }
+        deal_shared_passes(&mut self.interfaces, &self.x_old);
+    }
+}
+
+/// Deals the traction nodes of every pass of `interfaces` that ranks share by their work at
+/// positions `x`.
+fn deal_shared_passes(interfaces: &mut [ContactInterface], x: &[[f64; 3]]) {
+    for pass in interfaces.iter_mut().flat_map(|i| &mut i.passes) {
+        if pass.is_shared() {
+            pass.deal(x);
         }
     }
 }

@@ -554,13 +554,7 @@ fn the_deal_follows_the_contact_and_a_restart_deals_alike() {
             .iter()
             .map(|c| {
                 let pass = &c.interfaces[0].passes[0];
-                let faces: Vec<usize> = (0..pass.sec_faces.len()).collect();
-                let pairs: Vec<usize> = pass
-                    .candidates(x, &faces, super::EVAL_MARGIN)
-                    .iter()
-                    .map(|(_, ms)| ms.len())
-                    .collect();
-                let work = node_work(&pass.carriers, &pairs, pass.nodes.len());
+                let work = pass.node_work_at(x);
                 let mine = pass.held.iter().map(|&a| work[a]).sum();
                 (pass.held.clone(), mine)
             })
