@@ -20,9 +20,10 @@ mod common;
 
 use std::path::PathBuf;
 
-/// The bound on the linear iterations per Newton iteration of any step of the smallest level
-/// (measured: 26-55, docs/performance.md, "Refinement").
-const MAX_LINEAR_PER_NEWTON: f64 = 60.0;
+/// The bound on the linear iterations per Newton iteration of any step of the smallest level,
+/// issue 29's target (measured: 26-37 on 1 rank; 51-55 in the slide while the bulk's
+/// multigrid kept the interpolation of its first set-up; docs/performance.md, "Refinement").
+const MAX_LINEAR_PER_NEWTON: f64 = 40.0;
 
 /// The bound on the Newton iterations of the smallest level's run with the direct solve:
 /// measured 363 without a cut (17-26 per slide step, docs/performance.md, "Refinement").

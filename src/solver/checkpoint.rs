@@ -29,8 +29,9 @@
 //! **The same answer, bit for bit.** On the same rank count the partition, the dofs and every
 //! evaluation are those of the run that wrote the checkpoint. What the linear solver built is
 //! not in a file: the factorization the next step's predictor reuses under
-//! `steps.predictor_tangent = "last_newton"`, and the multigrid hierarchy PETSc keeps from one
-//! setup to the next (GAMG reuses its interpolation while the matrix stays the same object).
+//! `steps.predictor_tangent = "last_newton"`, and what a preconditioner keeps from one set-up
+//! to the next (GAMG under the user's own options reuses its interpolation while the matrix
+//! stays the same object; the project's defaults build it anew, `src/petsc/ksp.rs`).
 //! So after a checkpoint the run goes on as a restart from it would: with a new matrix of the
 //! same pattern (and on the iterative path a new Newton solver), the next step's predictor
 //! assembling the tangent at the converged state. (A checkpoint written at a stop that is not one of
@@ -255,8 +256,8 @@ impl Run<'_> {
         let moves = self.model.parts().iter().any(|c| c.pattern_moves());
         let l = &mut self.linear;
         if l.choice.path != LinearPath::Direct {
-            // The interface split keeps its fields' matrices, and the bulk's multigrid its
-            // interpolation, through a new matrix. (Not on the direct path, where a new matrix
+            // The interface split keeps its fields' matrices through a new matrix (and so would
+            // a multigrid told to reuse its interpolation). (Not on the direct path, where a new matrix
             // suffices: Debian's PETSc 3.18 crashes in SuperLU_DIST's first factorization after
             // a solver that used it was destroyed.)
             let solver = (l.force_scale, l.choice.path);
