@@ -87,18 +87,17 @@ const ITERATIVE: [(&str, &str); 4] = [
     ("-ksp_max_it", "1000"),
 ];
 
-/// Multigrid on the whole matrix: [`LinearPath::Iterative`] without interfaces. PETSc's GAMG
-/// would keep the interpolation of its first set-up for as long as the matrix object lives
-/// (here the whole run); it is built anew for every Jacobian instead, so that it follows the
-/// deformation and the contact states.
-const MULTIGRID: [(&str, &str); 2] = [
-    ("-pc_type", "gamg"),
-    ("-pc_gamg_reuse_interpolation", "false"),
+/// The options that say whether GAMG keeps its interpolation from one set-up to the next, on
+/// the whole matrix or on the interface split's bulk field. PETSc's default keeps it for as
+/// long as the matrix lives (here the whole run); the iterative path instead builds it anew
+/// once per load step ([`super::Snes::rebuild_multigrid`]), unless the user gives one of these.
+pub(crate) const MULTIGRID_REUSE: [&str; 2] = [
+    "-pc_gamg_reuse_interpolation",
+    "-fieldsplit_bulk_pc_gamg_reuse_interpolation",
 ];
 
-/// The field split of [`LinearPath::Iterative`] with interfaces (its bulk field's multigrid
-/// built anew for every Jacobian, as in [`MULTIGRID`]).
-const INTERFACE_SPLIT: [(&str, &str); 8] = [
+/// The field split of [`LinearPath::Iterative`] with interfaces.
+const INTERFACE_SPLIT: [(&str, &str); 7] = [
     ("-pc_type", "fieldsplit"),
     ("-pc_fieldsplit_type", "multiplicative"),
     ("-fieldsplit_interface_ksp_type", "preonly"),
@@ -106,7 +105,6 @@ const INTERFACE_SPLIT: [(&str, &str); 8] = [
     ("-fieldsplit_interface_pc_factor_mat_solver_type", "mumps"),
     ("-fieldsplit_bulk_ksp_type", "preonly"),
     ("-fieldsplit_bulk_pc_type", "gamg"),
-    ("-fieldsplit_bulk_pc_gamg_reuse_interpolation", "false"),
 ];
 
 /// Every option [`set_linear_solver_defaults`] may set (restored after each run of a study:
@@ -114,13 +112,7 @@ const INTERFACE_SPLIT: [(&str, &str); 8] = [
 pub(crate) fn defaulted_options() -> impl Iterator<Item = &'static str> {
     ["-pc_factor_mat_solver_type", "-mat_mumps_icntl_24"]
         .into_iter()
-        .chain(
-            ITERATIVE
-                .iter()
-                .chain(&MULTIGRID)
-                .chain(&INTERFACE_SPLIT)
-                .map(|o| o.0),
-        )
+        .chain(ITERATIVE.iter().chain(&INTERFACE_SPLIT).map(|o| o.0))
 }
 
 /// The default linear solver, as option defaults so that any user choice replaces it whole:
@@ -134,13 +126,12 @@ pub(crate) fn set_linear_solver_defaults(path: LinearPath) -> Result<()> {
         for (name, value) in ITERATIVE {
             set_default(name, value)?;
         }
-        let preconditioner: &[(&str, &str)] = if interface_split {
-            &INTERFACE_SPLIT
+        if interface_split {
+            for (name, value) in INTERFACE_SPLIT {
+                set_default(name, value)?;
+            }
         } else {
-            &MULTIGRID
-        };
-        for &(name, value) in preconditioner {
-            set_default(name, value)?;
+            set_default("-pc_type", "gamg")?;
         }
         return Ok(());
     }

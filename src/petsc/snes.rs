@@ -129,8 +129,22 @@ struct Context<'a> {
     residual: &'a mut ResidualFn<'a>,
     jacobian: &'a mut JacobianFn<'a>,
     step_limit: Option<&'a mut StepLimitFn<'a>>,
+    /// The solver's [`Multigrid`] during the solve (written back after it).
+    multigrid: Multigrid,
     failure: Option<Failure>,
     domain_error: Option<String>,
+}
+
+/// What the multigrid of the iterative path does at the set-up after the next Jacobian
+/// ([`Snes::rebuild_multigrid`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Multigrid {
+    /// Whatever the options say (the direct path, or the user's own reuse option).
+    AsTheOptionsSay,
+    /// Build the interpolation anew.
+    Rebuild,
+    /// Keep the interpolation, redo the coarse operators (Galerkin products) only.
+    Keep,
 }
 
 /// A PETSc nonlinear solver; destroyed on drop.
@@ -140,6 +154,7 @@ pub struct Snes {
     /// The convergence test's state ([`Snes::stop_on_cycling`]); boxed, as PETSc holds its
     /// address.
     cycling: Box<Cycling>,
+    multigrid: Multigrid,
 }
 
 /// The convergence test's own state: the last residual norms of a solve, for
@@ -180,10 +195,20 @@ impl Snes {
         super::ensure_initialized()?;
         let mut raw: p::SNES = std::ptr::null_mut();
         chk!(SNESCreate(super::comm(), &mut raw))?;
+        let user_reuse = super::ksp::MULTIGRID_REUSE
+            .iter()
+            .map(|name| super::options::has(name))
+            .collect::<Result<Vec<bool>>>()?
+            .contains(&true);
+        let multigrid = match path {
+            super::ksp::LinearPath::Iterative { .. } if !user_reuse => Multigrid::Keep,
+            _ => Multigrid::AsTheOptionsSay,
+        };
         let mut snes = Snes {
             raw,
             history: Vec::new(),
             cycling: Box::default(),
+            multigrid,
         };
         let cycling = &mut *snes.cycling as *mut Cycling as *mut c_void;
         chk!(SNESSetConvergenceTest(
@@ -307,6 +332,7 @@ impl Snes {
             residual,
             jacobian,
             step_limit,
+            multigrid: self.multigrid,
             failure: None,
             domain_error: None,
         };
@@ -343,6 +369,7 @@ impl Snes {
             ))?;
         }
         let solved = chk!(SNESSolve(self.raw, std::ptr::null_mut(), x.raw));
+        self.multigrid = ctx.multigrid;
         // Detach the context: it lives on this stack frame only.
         if limited {
             chk!(SNESLineSearchSetPreCheck(ls, None, std::ptr::null_mut()))?;
@@ -366,6 +393,19 @@ impl Snes {
             None => solved?,
         }
         self.outcome(ctx.domain_error)
+    }
+
+    /// On the iterative path (unless the user's options say whether GAMG reuses its
+    /// interpolation, `ksp::MULTIGRID_REUSE`): the preconditioner's multigrid (GAMG on the
+    /// whole matrix, or on a field of the field split) builds its interpolation anew at the
+    /// set-up after the next Jacobian, and keeps it at the later ones, redoing only its coarse
+    /// operators, until this is called again. Called once per load step, the interpolation
+    /// follows the deformation at the price of one full set-up per step, not per Newton
+    /// iteration; PETSc's default would keep the first set-up's for the whole run.
+    pub fn rebuild_multigrid(&mut self) {
+        if self.multigrid != Multigrid::AsTheOptionsSay {
+            self.multigrid = Multigrid::Rebuild;
+        }
     }
 
     /// From the next solve on, stop a solve (`DIVERGED_DTOL`) that cycles: its residual norm
@@ -654,9 +694,62 @@ unsafe extern "C" fn jacobian_trampoline(
         |c| {
             let xv = Vector::from_borrowed(x)?;
             let mut jm = Matrix::from_borrowed(pmat)?;
-            (c.jacobian)(&xv, &mut jm)
+            (c.jacobian)(&xv, &mut jm)?;
+            let keep = match c.multigrid {
+                Multigrid::AsTheOptionsSay => return Ok(()),
+                Multigrid::Rebuild => false,
+                Multigrid::Keep => true,
+            };
+            set_multigrid_reuse(snes, keep)?;
+            c.multigrid = Multigrid::Keep;
+            Ok(())
         },
     )
+}
+
+/// Tells the multigrid of `snes`'s preconditioner (GAMG on the whole matrix, or GAMG in any
+/// field of a field split) whether its next set-up keeps its interpolation (`keep`) or builds
+/// it anew. Does nothing to other preconditioners, nor to a field whose type is not set yet
+/// (before the split's first set-up, which builds everything anyway).
+fn set_multigrid_reuse(snes: p::SNES, keep: bool) -> Result<()> {
+    let mut ksp: p::KSP = std::ptr::null_mut();
+    chk!(SNESGetKSP(snes, &mut ksp))?;
+    let mut pc: p::PC = std::ptr::null_mut();
+    chk!(KSPGetPC(ksp, &mut pc))?;
+    let mut pc_type: p::PCType = std::ptr::null();
+    chk!(PCGetType(pc, &mut pc_type))?;
+    let flag = if keep {
+        p::PetscBool::PETSC_TRUE
+    } else {
+        p::PetscBool::PETSC_FALSE
+    };
+    // SAFETY: PETSc returns its static type name, or null.
+    let pcs = match unsafe { type_name(pc_type) }.as_str() {
+        "fieldsplit" => field_preconditioners(pc)?,
+        _ => vec![pc],
+    };
+    for pc in pcs {
+        // A no-op on a preconditioner that is not GAMG.
+        chk!(PCGAMGSetReuseInterpolation(pc, flag))?;
+    }
+    Ok(())
+}
+
+/// The preconditioners of the fields of the field split `pc`.
+fn field_preconditioners(pc: p::PC) -> Result<Vec<p::PC>> {
+    let mut n: PetscInt = 0;
+    let mut subksp: *mut p::KSP = std::ptr::null_mut();
+    chk!(PCFieldSplitGetSubKSP(pc, &mut n, &mut subksp))?;
+    let pcs = (0..n.max(0) as usize)
+        .map(|k| {
+            let mut sub: p::PC = std::ptr::null_mut();
+            // SAFETY: PETSc returned an array of `n` KSPs, freed below.
+            chk!(KSPGetPC(unsafe { *subksp.add(k) }, &mut sub)).map(|_| sub)
+        })
+        .collect();
+    // SAFETY: the array was allocated by PETSc for the caller.
+    chk!(petsc_ffi_free(subksp as *mut c_void))?;
+    pcs
 }
 
 unsafe extern "C" fn step_limit_trampoline(

@@ -82,6 +82,7 @@ impl Run<'_> {
             self.predict(t, t_new)?;
         }
         self.cx.evaluator.borrow_mut().t = t_new;
+        self.linear.snes.rebuild_multigrid();
         let solve_stage = self.phases.push("solve")?;
         let solved = self.solve_step(t_new)?;
         self.linear.snes.force_iteration(false)?;
