@@ -154,6 +154,8 @@ pub struct Snes {
     /// The convergence test's state ([`Snes::stop_on_cycling`]); boxed, as PETSc holds its
     /// address.
     cycling: Box<Cycling>,
+    /// What the multigrid does at the set-up after the next Jacobian
+    /// ([`Snes::rebuild_multigrid`]).
     multigrid: Multigrid,
 }
 
@@ -735,8 +737,15 @@ fn set_multigrid_reuse(snes: p::SNES, keep: bool) -> Result<()> {
     Ok(())
 }
 
-/// The preconditioners of the fields of the field split `pc`.
+/// The preconditioners of the fields of the field split `pc`; none for a Schur complement
+/// split, whose fields PETSc lists only once it is set up (its multigrid is left to the
+/// options).
 fn field_preconditioners(pc: p::PC) -> Result<Vec<p::PC>> {
+    let mut split_type = p::PCCompositeType(0);
+    chk!(PCFieldSplitGetType(pc, &mut split_type))?;
+    if split_type == p::PCCompositeType::PC_COMPOSITE_SCHUR {
+        return Ok(Vec::new());
+    }
     let mut n: PetscInt = 0;
     let mut subksp: *mut p::KSP = std::ptr::null_mut();
     chk!(PCFieldSplitGetSubKSP(pc, &mut n, &mut subksp))?;

@@ -256,8 +256,8 @@ impl Run<'_> {
         let moves = self.model.parts().iter().any(|c| c.pattern_moves());
         let l = &mut self.linear;
         if l.choice.path != LinearPath::Direct {
-            // The interface split keeps its fields' matrices through a new matrix (and so would
-            // a multigrid told to reuse its interpolation). (Not on the direct path, where a new matrix
+            // A preconditioner may keep what it built (the interface split its fields'
+            // matrices) through a new matrix. (Not on the direct path, where a new matrix
             // suffices: Debian's PETSc 3.18 crashes in SuperLU_DIST's first factorization after
             // a solver that used it was destroyed.)
             let solver = (l.force_scale, l.choice.path);
