@@ -197,11 +197,10 @@ impl Snes {
         super::ensure_initialized()?;
         let mut raw: p::SNES = std::ptr::null_mut();
         chk!(SNESCreate(super::comm(), &mut raw))?;
-        let user_reuse = super::ksp::MULTIGRID_REUSE
-            .iter()
-            .map(|name| super::options::has(name))
-            .collect::<Result<Vec<bool>>>()?
-            .contains(&true);
+        let mut user_reuse = false;
+        for name in super::ksp::MULTIGRID_REUSE {
+            user_reuse |= super::options::has(name)?;
+        }
         let multigrid = match path {
             super::ksp::LinearPath::Iterative { .. } if !user_reuse => Multigrid::Keep,
             _ => Multigrid::AsTheOptionsSay,
@@ -294,14 +293,7 @@ impl Snes {
     /// The preconditioner of this solver's linear solver, and its type name (empty before
     /// one is set).
     fn preconditioner(&self) -> Result<(p::PC, String)> {
-        let mut ksp: p::KSP = std::ptr::null_mut();
-        chk!(SNESGetKSP(self.raw, &mut ksp))?;
-        let mut pc: p::PC = std::ptr::null_mut();
-        chk!(KSPGetPC(ksp, &mut pc))?;
-        let mut pc_type: p::PCType = std::ptr::null();
-        chk!(PCGetType(pc, &mut pc_type))?;
-        // SAFETY: PETSc returns its static type name, or null.
-        Ok((pc, unsafe { type_name(pc_type) }))
+        preconditioner_of(self.raw)
     }
 
     /// Solves F(x) = 0 from the initial guess in `x` (overwritten by the solution).
@@ -714,19 +706,13 @@ unsafe extern "C" fn jacobian_trampoline(
 /// it anew. Does nothing to other preconditioners, nor to a field whose type is not set yet
 /// (before the split's first set-up, which builds everything anyway).
 fn set_multigrid_reuse(snes: p::SNES, keep: bool) -> Result<()> {
-    let mut ksp: p::KSP = std::ptr::null_mut();
-    chk!(SNESGetKSP(snes, &mut ksp))?;
-    let mut pc: p::PC = std::ptr::null_mut();
-    chk!(KSPGetPC(ksp, &mut pc))?;
-    let mut pc_type: p::PCType = std::ptr::null();
-    chk!(PCGetType(pc, &mut pc_type))?;
+    let (pc, pc_type) = preconditioner_of(snes)?;
     let flag = if keep {
         p::PetscBool::PETSC_TRUE
     } else {
         p::PetscBool::PETSC_FALSE
     };
-    // SAFETY: PETSc returns its static type name, or null.
-    let pcs = match unsafe { type_name(pc_type) }.as_str() {
+    let pcs = match pc_type.as_str() {
         "fieldsplit" => field_preconditioners(pc)?,
         _ => vec![pc],
     };
@@ -735,6 +721,18 @@ fn set_multigrid_reuse(snes: p::SNES, keep: bool) -> Result<()> {
         chk!(PCGAMGSetReuseInterpolation(pc, flag))?;
     }
     Ok(())
+}
+
+/// The preconditioner of `snes`'s linear solver, and its type name (empty before one is set).
+fn preconditioner_of(snes: p::SNES) -> Result<(p::PC, String)> {
+    let mut ksp: p::KSP = std::ptr::null_mut();
+    chk!(SNESGetKSP(snes, &mut ksp))?;
+    let mut pc: p::PC = std::ptr::null_mut();
+    chk!(KSPGetPC(ksp, &mut pc))?;
+    let mut pc_type: p::PCType = std::ptr::null();
+    chk!(PCGetType(pc, &mut pc_type))?;
+    // SAFETY: PETSc returns its static type name, or null.
+    Ok((pc, unsafe { type_name(pc_type) }))
 }
 
 /// The preconditioners of the fields of the field split `pc`; none for a Schur complement
