@@ -7,9 +7,11 @@
 //!   (`cases/refinement/hex8_1.toml`, 8 028 free dofs; release mode:
 //!   `cargo test --release --test linear_solver`): GMRES with an exact solve on the interface's
 //!   dofs and multigrid on the rest converges every load step with at most
-//!   [`MAX_LINEAR_PER_NEWTON`] linear iterations per Newton iteration and at most 25 % more
-//!   Newton iterations than the direct solve, to the direct solve's state within the Newton
-//!   tolerance (1e-8 relative), and to the same state on 1 and 2 ranks; the direct solve takes
+//!   [`MAX_LINEAR_PER_NEWTON`] linear iterations per Newton iteration (inexact Newton: each
+//!   linear tolerance follows the Newton residual's progress) and at most
+//!   [`MAX_NEWTON_ITERATIVE_OVER_DIRECT`] times the direct solve's Newton iterations, to the
+//!   direct solve's state within the Newton tolerance (1e-8 relative), and to the same state
+//!   on 1 and 2 ranks; the direct solve takes
 //!   at most [`MAX_NEWTON_LEVEL_1`] Newton iterations, and no run cuts a step.
 //! - The blocks stay in contact while they slide: the normal contact force of every slide step
 //!   lies between [`LEAST_SLIDE_FORCE`] and 1 times that at the end of the compression (it
@@ -20,10 +22,16 @@ mod common;
 
 use std::path::PathBuf;
 
-/// The bound on the linear iterations per Newton iteration of any step of the smallest level,
-/// issue 29's target (measured: 26-37 on 1 rank; 51-55 in the slide while the bulk's
-/// multigrid kept the interpolation of its first set-up; docs/performance.md, "Refinement").
-const MAX_LINEAR_PER_NEWTON: f64 = 40.0;
+/// The bound on the linear iterations per Newton iteration of any step of the smallest level
+/// (issue 29's target: 40). Measured with inexact Newton: 11-18 on 1 rank; 26-37 with the fixed
+/// linear tolerance, 51-55 in the slide while the bulk's multigrid kept the interpolation of
+/// its first set-up (docs/performance.md, "Refinement" and "Inexact Newton").
+const MAX_LINEAR_PER_NEWTON: f64 = 25.0;
+
+/// The most Newton iterations of the iterative path, as a multiple of the direct solve's:
+/// inexact Newton's rough early steps cost a few (measured 387 and 379 on 1 and 2 ranks
+/// against 363).
+const MAX_NEWTON_ITERATIVE_OVER_DIRECT: f64 = 1.1;
 
 /// The bound on the Newton iterations of the smallest level's run with the direct solve:
 /// measured 363 without a cut (17-26 per slide step, docs/performance.md, "Refinement").
@@ -161,7 +169,7 @@ fn the_iterative_path_solves_the_smallest_level_as_the_direct_one() {
         );
         let newton = common::metric(out, "total_newton_its");
         assert!(
-            newton <= 1.25 * newton_direct,
+            newton <= MAX_NEWTON_ITERATIVE_OVER_DIRECT * newton_direct,
             "{ranks} rank(s): {newton} Newton iterations against {newton_direct} (direct)"
         );
         let d = common::max_rel_difference_of_runs(&direct_out, out);

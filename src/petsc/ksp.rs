@@ -87,6 +87,23 @@ const ITERATIVE: [(&str, &str); 4] = [
     ("-ksp_max_it", "1000"),
 ];
 
+/// Inexact Newton on the iterative path: each Newton step's linear tolerance follows the
+/// Newton residual's progress (Eisenstat and Walker's second choice, PETSc's default version:
+/// `rtol_k = gamma (|F_k| / |F_k-1|)^alpha`, safeguarded), here at most [`EW_RTOL_MAX`]
+/// (also the first step's), instead of the fixed `-ksp_rtol`. Far from the solution, where the
+/// line search cuts the step anyway, a rough direction costs a fraction of an exact one; near
+/// it the tolerance falls with the residual, so the convergence stays fast. Each is a default
+/// the user's `-snes_ksp_ew*` options replace.
+const INEXACT_NEWTON: [(&str, &str); 3] = [
+    ("-snes_ksp_ew", "true"),
+    ("-snes_ksp_ew_rtol0", EW_RTOL_MAX),
+    ("-snes_ksp_ew_rtolmax", EW_RTOL_MAX),
+];
+
+/// The loosest linear tolerance of [`INEXACT_NEWTON`] (docs/performance.md, "Inexact
+/// Newton": the Newton and linear iterations of the refinement family at 1e-2 and 1e-3).
+const EW_RTOL_MAX: &str = "1e-3";
+
 /// The options that say whether GAMG keeps its interpolation from one set-up to the next, on
 /// the whole matrix or on the interface split's bulk field. PETSc's default keeps it for as
 /// long as the matrix lives (here the whole run); the iterative path instead builds it anew
@@ -112,7 +129,13 @@ const INTERFACE_SPLIT: [(&str, &str); 7] = [
 pub(crate) fn defaulted_options() -> impl Iterator<Item = &'static str> {
     ["-pc_factor_mat_solver_type", "-mat_mumps_icntl_24"]
         .into_iter()
-        .chain(ITERATIVE.iter().chain(&INTERFACE_SPLIT).map(|o| o.0))
+        .chain(
+            ITERATIVE
+                .iter()
+                .chain(&INEXACT_NEWTON)
+                .chain(&INTERFACE_SPLIT)
+                .map(|o| o.0),
+        )
 }
 
 /// The default linear solver, as option defaults so that any user choice replaces it whole:
@@ -123,7 +146,7 @@ pub(crate) fn set_linear_solver_defaults(path: LinearPath) -> Result<()> {
     use super::options::{has, set_default};
     let (ksp, pc) = (has("-ksp_type")?, has("-pc_type")?);
     if let (false, false, LinearPath::Iterative { interface_split }) = (ksp, pc, path) {
-        for (name, value) in ITERATIVE {
+        for (name, value) in ITERATIVE.into_iter().chain(INEXACT_NEWTON) {
             set_default(name, value)?;
         }
         if interface_split {

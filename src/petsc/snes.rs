@@ -74,6 +74,19 @@ pub struct Tolerances {
     pub max_it: usize,
 }
 
+/// The tolerances of `ksp`: relative, absolute, divergence, iterations (`KSPGetTolerances`).
+fn ksp_tolerances(ksp: p::KSP) -> Result<(f64, f64, f64, PetscInt)> {
+    let (mut rtol, mut atol, mut dtol, mut max_it) = (0.0, 0.0, 0.0, 0);
+    chk!(KSPGetTolerances(
+        ksp,
+        &mut rtol,
+        &mut atol,
+        &mut dtol,
+        &mut max_it
+    ))?;
+    Ok((rtol, atol, dtol, max_it))
+}
+
 /// A PETSc type name as a `String` (empty for null).
 ///
 /// # Safety
@@ -157,6 +170,9 @@ pub struct Snes {
     /// What the multigrid does at the set-up after the next Jacobian
     /// ([`Snes::rebuild_multigrid`]).
     multigrid: Multigrid,
+    /// The linear solver's relative tolerance as the options set it (`-ksp_rtol`), for the
+    /// solves outside Newton while inexact Newton changes it at every Newton step.
+    linear_rtol: f64,
 }
 
 /// The convergence test's own state: the last residual norms of a solve, for
@@ -210,6 +226,7 @@ impl Snes {
             history: Vec::new(),
             cycling: Box::default(),
             multigrid,
+            linear_rtol: 0.0,
         };
         let cycling = &mut *snes.cycling as *mut Cycling as *mut c_void;
         chk!(SNESSetConvergenceTest(
@@ -265,6 +282,9 @@ impl Snes {
                 msg: format!("-snes_max_it {max_it}: must be >= 0"),
             });
         }
+        let mut ksp: p::KSP = std::ptr::null_mut();
+        chk!(SNESGetKSP(snes.raw, &mut ksp))?;
+        snes.linear_rtol = ksp_tolerances(ksp)?.0;
         if snes.factorizes()? {
             super::ksp::probe_factorization().map_err(|e| options_error(options_source, e))?;
         }
@@ -544,10 +564,15 @@ impl Snes {
         chk!(SNESGetKSP(self.raw, &mut ksp))?;
         chk!(KSPSetOperators(ksp, a.raw, a.raw))?;
         // Eisenstat-Walker's tolerance (`-snes_ksp_ew`) is computed from the norms of a
-        // running Newton solve, which a solve outside it lacks: off for this one.
+        // running Newton solve, which a solve outside it lacks: off for this one, which takes
+        // the options' own tolerance instead of the last Newton step's.
         let mut ew = p::PetscBool::PETSC_FALSE;
         chk!(SNESKSPGetUseEW(self.raw, &mut ew))?;
         chk!(SNESKSPSetUseEW(self.raw, p::PetscBool::PETSC_FALSE))?;
+        if ew == p::PetscBool::PETSC_TRUE {
+            let (_, atol, dtol, max_it) = ksp_tolerances(ksp)?;
+            chk!(KSPSetTolerances(ksp, self.linear_rtol, atol, dtol, max_it))?;
+        }
         let solved = chk!(KSPSolve(ksp, b.raw, x.raw));
         chk!(SNESKSPSetUseEW(self.raw, ew))?;
         solved?;
