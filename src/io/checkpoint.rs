@@ -29,7 +29,7 @@ use crate::model::{StateSink, StateSource};
 const MAGIC: &[u8; 18] = b"mortar checkpoint\n";
 
 /// The layout of the records; a checkpoint of another format version is refused.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 
 const F64S: u8 = 1;
 const U64S: u8 = 2;

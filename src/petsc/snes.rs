@@ -63,6 +63,10 @@ pub struct SnesOutcome {
     pub residual_history: Vec<f64>,
     /// The last domain error reported by a callback, if any.
     pub domain_error: Option<String>,
+    /// The line search took less than the full Newton step at some iteration (`lambda < 1`;
+    /// never with full steps). Read by PETSc's default convergence test only: false when
+    /// `-snes_convergence_test` replaces it.
+    pub shortened: bool,
 }
 
 /// Newton settings that a scene sets; `-snes_*` options override them.
@@ -189,6 +193,8 @@ struct Cycling {
     /// The floor of the last test, and whether it ended the last solve.
     floor: f64,
     at_floor: bool,
+    /// The line search shortened a step of the solve under way ([`SnesOutcome::shortened`]).
+    shortened: bool,
 }
 
 /// The round-off floor of a residual norm, in units of `eps |K_ii|_max (L + |u|_max)`: a
@@ -628,6 +634,7 @@ impl Snes {
             linear_iterations: lits as usize,
             residual_history: self.history[..n].to_vec(),
             domain_error,
+            shortened: self.cycling.shortened,
         })
     }
 }
@@ -852,6 +859,19 @@ unsafe extern "C" fn convergence_trampoline(
     if it == 0 {
         cycling.last = [f64::INFINITY; 2];
         cycling.at_floor = false;
+        cycling.shortened = false;
+    } else {
+        let mut ls: p::SNESLineSearch = std::ptr::null_mut();
+        let code = p::SNESGetLineSearch(snes, &mut ls);
+        if code != 0 {
+            return code;
+        }
+        let mut lambda = 1.0;
+        let code = p::SNESLineSearchGetLambda(ls, &mut lambda);
+        if code != 0 {
+            return code;
+        }
+        cycling.shortened |= lambda < 1.0;
     }
     if cycling.length > 0.0 && *reason == p::SNESConvergedReason::SNES_CONVERGED_ITERATING {
         let code = round_off_floor(snes, cycling.length, &mut cycling.floor);

@@ -7,7 +7,8 @@
 //!
 //! - what identifies the run: the program version, the digests of the case file as read, of
 //!   the mesh and of the PETSc options file, and the rank count;
-//! - the load path: the load and step size after cuts, the step count and the run's counters;
+//! - the load path: the load and step size after cuts, the step count, the run's counters and
+//!   whether the next step starts with the fallback line search;
 //!   the summary's step records;
 //! - this rank's part of the solution and its rows of the matrix pattern (a contact pattern
 //!   grows with the contact zone: the restarted matrix has the same nonzeros, so the linear
@@ -297,6 +298,7 @@ impl Run<'_> {
             c.newton,
             c.cuts,
             s.cuts_in_row,
+            s.lead_with_fallback as usize,
         ];
         out.u64s("counts", &counts.map(|n| n as u64));
         let steps = &self.summary.steps;
@@ -342,12 +344,14 @@ impl Run<'_> {
         let from = &mut resumed.reader;
         let (t, dt) = resumed.load;
         let counts = from.u64s("counts")?;
-        let &[step, capped, fallbacks, unconverged, newton, cuts, cuts_in_row] = &counts[..] else {
+        let &[step, capped, fallbacks, unconverged, newton, cuts, cuts_in_row, lead] = &counts[..]
+        else {
             return Err(layout("counts"));
         };
         let s = &mut self.state;
         (s.t, s.dt, s.step) = (t, dt, step as usize);
         s.cuts_in_row = cuts_in_row as usize;
+        s.lead_with_fallback = lead != 0;
         let c = &mut s.counts;
         (c.uzawa_capped, c.fallbacks, c.fallbacks_before) =
             (capped as usize, fallbacks as usize, fallbacks as usize);

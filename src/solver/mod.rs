@@ -14,7 +14,10 @@
 //! slip state flipping back and forth), the solve is redone from
 //! the same start with the `FALLBACK_LINE_SEARCH` before the step is cut. The step's Newton
 //! count includes the failed attempt; the redone solves are counted in the summary
-//! (`line_search_fallbacks`) and named in the progress line.
+//! (`line_search_fallbacks`) and named in the progress line. When a step's first solve needed
+//! the fallback, the next step's first solve starts with it (`started with bt` in the progress
+//! line) and does so until it takes full steps throughout: a steady slide's steps fail their
+//! full steps alike.
 //!
 //! Each step's Newton starts from the load-step predictor (`predictor`, `steps.predictor`),
 //! which halves the Newton iterations of displacement-driven steps and removes the cuts that a

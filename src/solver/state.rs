@@ -23,6 +23,10 @@ pub(super) struct RunState {
     /// step's start, or in a Jacobian evaluation, which ends the solve under way (any later
     /// solve of the step returns at once).
     pub stop: std::cell::Cell<Option<i32>>,
+    /// The next step's first solve starts with the fallback line search instead of full
+    /// steps: the last step's first solve needed it (its full steps failed, or, started with
+    /// it, it shortened a step). See [`super::Run::attempt`].
+    pub lead_with_fallback: bool,
 }
 
 /// Counters over the whole run.
@@ -55,6 +59,7 @@ impl RunState {
             step: 0,
             counts: Counts::default(),
             stop: std::cell::Cell::new(None),
+            lead_with_fallback: false,
         }
     }
 
@@ -116,6 +121,7 @@ mod tests {
             step: 0,
             counts: Counts::default(),
             stop: std::cell::Cell::new(None),
+            lead_with_fallback: false,
         }
     }
 

@@ -40,6 +40,8 @@ struct Counted {
     /// Newton and linear iterations of every solve of the step (failed attempts included).
     newton: usize,
     linear: usize,
+    /// The step's first solve started with the fallback line search.
+    led: bool,
 }
 
 /// The solves of one step.
@@ -162,8 +164,10 @@ impl Run<'_> {
         if self.cx.scene.stick_predictor && self.model.is_frictional() {
             self.stick_predictor(&mut counted)?;
         }
+        let mut first_of_step = true;
         loop {
-            let outcome = self.attempt(&mut counted)?;
+            let outcome = self.attempt(&mut counted, first_of_step)?;
+            first_of_step = false;
             counted.newton += outcome.iterations;
             counted.linear += outcome.linear_iterations;
             if !outcome.converged
@@ -206,10 +210,22 @@ impl Run<'_> {
     /// they do not converge within [`FULL_STEP_ITERATIONS`] (or they cycle:
     /// [`FULL_STEP_CYCLE_PROGRESS`]), the same solve from the same start with the
     /// fallback line search (the failed attempt's iterations go to `counted`).
-    fn attempt(&mut self, counted: &mut Counted) -> Result<SnesOutcome> {
+    ///
+    /// A step's first solve (`first_of_step`; the Uzawa augmentations' solves start close to
+    /// their solution) starts with the fallback line search instead when the last step's first
+    /// solve needed it ([`super::state::RunState::lead_with_fallback`]): in a steady slide
+    /// every step's full steps fail alike. It keeps doing so while that line search shortens
+    /// a step; once it takes full steps throughout, the next step tries full steps again.
+    fn attempt(&mut self, counted: &mut Counted, first_of_step: bool) -> Result<SnesOutcome> {
         let Some(line_search) = self.fallback_line_search else {
             return self.solve_once();
         };
+        if first_of_step && self.state.lead_with_fallback {
+            counted.led = true;
+            let led = self.solve_with(line_search)?;
+            self.state.lead_with_fallback = led.shortened || !led.converged;
+            return Ok(led);
+        }
         let l = &mut self.linear;
         l.x.copy_to(&mut l.x_attempt)?;
         let max_it = l.snes.set_max_iterations(FULL_STEP_ITERATIONS)?;
@@ -227,12 +243,17 @@ impl Run<'_> {
         counted.newton += first.iterations;
         counted.linear += first.linear_iterations;
         self.state.counts.fallbacks += 1;
-        let l = &mut self.linear;
-        l.x_attempt.copy_to(&mut l.x)?;
-        l.snes.set_line_search(line_search)?;
-        let second = self.solve_once();
+        self.state.lead_with_fallback |= first_of_step;
+        self.linear.x_attempt.copy_to(&mut self.linear.x)?;
+        self.solve_with(line_search)
+    }
+
+    /// [`Run::solve_once`] with the line search `line_search`, then full steps again.
+    fn solve_with(&mut self, line_search: &str) -> Result<SnesOutcome> {
+        self.linear.snes.set_line_search(line_search)?;
+        let outcome = self.solve_once();
         self.linear.snes.set_line_search("basic")?;
-        second
+        outcome
     }
 
     /// One SNES solve of the current model from the current iterate (the closures borrow the
@@ -547,9 +568,13 @@ impl Run<'_> {
             (floor, true) => format!(" (below its round-off floor {floor:.1e})"),
             _ => String::new(),
         };
+        let led = match (solved.counted.led, self.fallback_line_search) {
+            (true, Some(line_search)) => format!(", started with {line_search}"),
+            _ => String::new(),
+        };
         self.say(format!(
             "  step {step} load {load:.6}: {} Newton its{uzawa}, |F| {residual:.3e}{floor}, {} \
-             linear its{}, {:.2} s",
+             linear its{led}{}, {:.2} s",
             solved.counted.newton,
             solved.counted.linear,
             retries_note(

@@ -114,6 +114,7 @@ pub(super) fn not_started(signal: i32) -> SnesOutcome {
         linear_iterations: 0,
         residual_history: Vec::new(),
         domain_error: Some(format!("interrupted by {}", interrupt::name(signal))),
+        shortened: false,
     }
 }
 
