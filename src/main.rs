@@ -239,26 +239,36 @@ fn execute(cli: Cli, program: String) -> Result<()> {
             let scaling = mortar::scaling::Scaling::read(&logs)?;
             let out = out.unwrap_or_else(|| PathBuf::from("out/scaling"));
             mortar::io::plot::print_warnings(scaling.write(&out)?);
-            print!("{}", scaling.table());
-            println!(
-                "mortar: scaling.csv, scaling.png and scaling.svg in {}",
+            let mut report = scaling.table();
+            report += &format!(
+                "mortar: scaling.csv, scaling.png and scaling.svg in {}\n",
                 out.display()
             );
             let last = scaling.runs.len() - 1;
             if let Some(s) = scaling.speedup_per_newton_iteration(last) {
-                println!("speedup per Newton iteration: {s:.2}");
+                report += &format!("speedup per Newton iteration: {s:.2}\n");
             }
-            println!("speedup: {:.2}", scaling.speedup(last));
-            Ok(())
+            report += &format!("speedup: {:.2}\n", scaling.speedup(last));
+            print_report(&report)
         }
         Command::Family { runs, out } => {
             let family = mortar::family::Family::read(&runs)?;
             let out = out.unwrap_or_else(|| PathBuf::from("out/family"));
             let csv = family.write(&out)?;
-            print!("{}", family.report());
-            println!("mortar: {}", csv.display());
-            Ok(())
+            print_report(&format!("{}mortar: {}\n", family.report(), csv.display()))
         }
+    }
+}
+
+/// Prints a report to stdout. A reader that stops early (`mortar family ... | head`) ends it
+/// quietly: the files are written by then.
+fn print_report(report: &str) -> Result<()> {
+    use std::io::Write;
+    match std::io::stdout().lock().write_all(report.as_bytes()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(Error::Other(format!("writing the report to stdout: {e}")))
+        }
+        _ => Ok(()),
     }
 }
 

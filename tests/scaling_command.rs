@@ -1,7 +1,8 @@
 //! `mortar scaling`: the PETSc logs of the contact patch scene on 1 and 2 ranks give a table of
 //! every phase, `scaling.csv` whose phases add up to the logged stages, the plot, and the last
-//! line `speedup: X` (the ratio of the logged wall times); the same log twice, or a file that
-//! is not a PETSc log, is one error line.
+//! line `speedup: X` (the ratio of the logged wall times), without a panic when the reader of
+//! its output goes away early; the same log twice, or a file that is not a PETSc log, is one
+//! error line.
 
 mod common;
 
@@ -101,6 +102,24 @@ fn speedup_from_the_logs_of_one_and_two_ranks() {
         );
     }
     assert!(out.join("scaling.png").is_file() && out.join("scaling.svg").is_file());
+
+    // A reader that goes away before the table (`mortar scaling ... | head -1`): no panic, a
+    // clean exit, the files written.
+    std::fs::remove_file(out.join("scaling.csv")).unwrap();
+    let mut child = common::mortar_command()
+        .arg("scaling")
+        .args([&logs[0], &logs[1]])
+        .arg("--out")
+        .arg(&out)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("cannot start mortar");
+    drop(child.stdout.take());
+    let o = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(o.status.success() && stderr.is_empty(), "{stderr}");
+    assert!(out.join("scaling.csv").is_file());
 
     // The same log twice (no second rank count): one line naming the file at fault.
     let o = run_scaling(&[&logs[0], &logs[0]], &out);
