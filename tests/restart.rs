@@ -19,7 +19,7 @@ const REPRODUCIBLE_ON_RANKS: &[&str] = &["-pc_factor_mat_solver_type", "superlu_
 /// Newton paths cut different steps.
 fn checkpoint_every(linear_solver: &str) -> usize {
     if linear_solver == "iterative" {
-        5
+        4
     } else {
         6
     }

@@ -63,9 +63,10 @@ pub struct SnesOutcome {
     pub residual_history: Vec<f64>,
     /// The last domain error reported by a callback, if any.
     pub domain_error: Option<String>,
-    /// The line search took less than the full Newton step at some iteration (`lambda < 1`;
-    /// never with full steps). Read by PETSc's default convergence test only: false when
-    /// `-snes_convergence_test` replaces it.
+    /// The line search took less than the full Newton step at some iteration (`lambda` below
+    /// the line search's damping, 1 by default; never with full steps; the contact reach's
+    /// shortening of an update is not the line search's and does not count). Read by the
+    /// default convergence test only: false when `-snes_convergence_test` replaces it.
     pub shortened: bool,
 }
 
@@ -388,6 +389,7 @@ impl Snes {
                 ctx_ptr
             ))?;
         }
+        self.cycling.shortened = false;
         let solved = chk!(SNESSolve(self.raw, std::ptr::null_mut(), x.raw));
         self.multigrid = ctx.multigrid;
         // Detach the context: it lives on this stack frame only.
@@ -866,12 +868,16 @@ unsafe extern "C" fn convergence_trampoline(
         if code != 0 {
             return code;
         }
-        let mut lambda = 1.0;
+        let (mut lambda, mut damping) = (1.0, 1.0);
         let code = p::SNESLineSearchGetLambda(ls, &mut lambda);
         if code != 0 {
             return code;
         }
-        cycling.shortened |= lambda < 1.0;
+        let code = p::SNESLineSearchGetDamping(ls, &mut damping);
+        if code != 0 {
+            return code;
+        }
+        cycling.shortened |= lambda < damping;
     }
     if cycling.length > 0.0 && *reason == p::SNESConvergedReason::SNES_CONVERGED_ITERATING {
         let code = round_off_floor(snes, cycling.length, &mut cycling.floor);

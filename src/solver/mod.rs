@@ -103,7 +103,8 @@ const FULL_STEP_ITERATIONS: usize = 10;
 /// frictional contact").
 const FULL_STEP_CYCLE_PROGRESS: f64 = 0.5;
 
-/// The line search of the second attempt: PETSc's `bt` (backtracking: the Newton step shortened
+/// The line search of the second attempt, and of a step's first one after a step that needed
+/// it (`Run::attempt`): PETSc's `bt` (backtracking: the Newton step shortened
 /// until ||F||^2 decreases enough, by cubic interpolation); why this one: docs/performance.md,
 /// "Newton on frictional contact".
 const FALLBACK_LINE_SEARCH: &str = "bt";
@@ -165,7 +166,8 @@ struct Run<'a> {
     phases: Phases,
     state: RunState,
     summary: Summary,
-    /// The line search of a second attempt (frictional scenes with full Newton steps).
+    /// The line search of a second attempt, or of a led first one (frictional scenes with full
+    /// Newton steps).
     fallback_line_search: Option<&'static str>,
     /// Print the contact state of every Newton iterate ([`CONTACT_MONITOR`]).
     contact_monitor: bool,

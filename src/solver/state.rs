@@ -25,7 +25,8 @@ pub(super) struct RunState {
     pub stop: std::cell::Cell<Option<i32>>,
     /// The next step's first solve starts with the fallback line search instead of full
     /// steps: the last step's first solve needed it (its full steps failed, or, started with
-    /// it, it shortened a step). See [`super::Run::attempt`].
+    /// it, it shortened a step). See [`super::Run::attempt`]; a stopped step puts back the
+    /// value it started with.
     pub lead_with_fallback: bool,
 }
 

@@ -74,6 +74,7 @@ impl Run<'_> {
             )));
         }
         self.linear.x.copy_to(&mut self.linear.x_prev)?;
+        let lead_at_start = self.state.lead_with_fallback;
         self.update_pattern(t)?;
         self.model.save();
         self.cx.evaluator.borrow_mut().assembly_seconds = 0.0;
@@ -96,8 +97,10 @@ impl Run<'_> {
             return self.finish_step(&solved, t_new, seconds, false);
         }
         if self.state.stop.get().is_some() {
-            // The run ends at the last finished step, as a failed one does.
+            // The run ends at the last finished step, as a failed one does (its checkpoint
+            // holds the state this step started from).
             self.restore()?;
+            self.state.lead_with_fallback = lead_at_start;
             return Ok(StepEnd::Stopped);
         }
         if self.accepts_unconverged(&solved.outcome)? {
@@ -216,18 +219,27 @@ impl Run<'_> {
     /// solve needed it ([`super::state::RunState::lead_with_fallback`]): in a steady slide
     /// every step's full steps fail alike. It keeps doing so while that line search shortens
     /// a step; once it takes full steps throughout, the next step tries full steps again.
+    /// When the led solve fails, full steps get the second attempt from the same start (with
+    /// every iteration the solve allows), and the step's later cuts try full steps first.
     fn attempt(&mut self, counted: &mut Counted, first_of_step: bool) -> Result<SnesOutcome> {
         let Some(line_search) = self.fallback_line_search else {
             return self.solve_once();
         };
+        self.linear.x.copy_to(&mut self.linear.x_attempt)?;
         if first_of_step && self.state.lead_with_fallback {
             counted.led = true;
             let led = self.solve_with(line_search)?;
-            self.state.lead_with_fallback = led.shortened || !led.converged;
-            return Ok(led);
+            if led.converged || self.state.stop.get().is_some() {
+                self.state.lead_with_fallback = led.shortened;
+                return Ok(led);
+            }
+            counted.newton += led.iterations;
+            counted.linear += led.linear_iterations;
+            self.state.lead_with_fallback = false;
+            self.linear.x_attempt.copy_to(&mut self.linear.x)?;
+            return self.solve_once();
         }
         let l = &mut self.linear;
-        l.x.copy_to(&mut l.x_attempt)?;
         let max_it = l.snes.set_max_iterations(FULL_STEP_ITERATIONS)?;
         if max_it < FULL_STEP_ITERATIONS {
             l.snes.set_max_iterations(max_it)?;
