@@ -207,15 +207,14 @@ fn execute(cli: Cli, program: String) -> Result<()> {
     match cli.command {
         Command::Check { case } => {
             let scene = Scene::load(&case)?;
-            println!(
-                "mortar: {} is valid: {} nodes, {} elements, {} bodies, {} constrained dofs",
+            print_report(&format!(
+                "mortar: {} is valid: {} nodes, {} elements, {} bodies, {} constrained dofs\n",
                 case.display(),
                 scene.mesh.num_nodes(),
                 scene.mesh.num_elements(),
                 scene.mesh.bodies.len(),
                 scene.constraints.len()
-            );
-            Ok(())
+            ))
         }
         Command::Run {
             case,
@@ -261,7 +260,7 @@ fn execute(cli: Cli, program: String) -> Result<()> {
 }
 
 /// Prints a report to stdout. A reader that stops early (`mortar family ... | head`) ends it
-/// quietly: the files are written by then.
+/// quietly: the files, if any, are written by then.
 fn print_report(report: &str) -> Result<()> {
     use std::io::Write;
     match std::io::stdout().lock().write_all(report.as_bytes()) {
