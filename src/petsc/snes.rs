@@ -79,6 +79,13 @@ pub struct Tolerances {
     pub max_it: usize,
 }
 
+/// The linear solver of `snes`.
+fn ksp_of(snes: p::SNES) -> Result<p::KSP> {
+    let mut ksp: p::KSP = std::ptr::null_mut();
+    chk!(SNESGetKSP(snes, &mut ksp))?;
+    Ok(ksp)
+}
+
 /// The tolerances of `ksp`: relative, absolute, divergence, iterations (`KSPGetTolerances`).
 fn ksp_tolerances(ksp: p::KSP) -> Result<(f64, f64, f64, PetscInt)> {
     let (mut rtol, mut atol, mut dtol, mut max_it) = (0.0, 0.0, 0.0, 0);
@@ -289,9 +296,7 @@ impl Snes {
                 msg: format!("-snes_max_it {max_it}: must be >= 0"),
             });
         }
-        let mut ksp: p::KSP = std::ptr::null_mut();
-        chk!(SNESGetKSP(snes.raw, &mut ksp))?;
-        snes.linear_rtol = ksp_tolerances(ksp)?.0;
+        snes.linear_rtol = ksp_tolerances(ksp_of(snes.raw)?)?.0;
         if snes.factorizes()? {
             super::ksp::probe_factorization().map_err(|e| options_error(options_source, e))?;
         }
@@ -568,8 +573,7 @@ impl Snes {
     /// Solves `a x = b` with the solver's own linear solver (sharing its factorization when
     /// `a` is the Jacobian matrix and unchanged).
     pub fn linear_solve(&mut self, a: &Matrix, b: &Vector, x: &mut Vector) -> Result<bool> {
-        let mut ksp: p::KSP = std::ptr::null_mut();
-        chk!(SNESGetKSP(self.raw, &mut ksp))?;
+        let ksp = ksp_of(self.raw)?;
         chk!(KSPSetOperators(ksp, a.raw, a.raw))?;
         // Eisenstat-Walker's tolerance (`-snes_ksp_ew`) is computed from the norms of a
         // running Newton solve, which a solve outside it lacks: off for this one, which takes
@@ -759,10 +763,8 @@ fn set_multigrid_reuse(snes: p::SNES, keep: bool) -> Result<()> {
 
 /// The preconditioner of `snes`'s linear solver, and its type name (empty before one is set).
 fn preconditioner_of(snes: p::SNES) -> Result<(p::PC, String)> {
-    let mut ksp: p::KSP = std::ptr::null_mut();
-    chk!(SNESGetKSP(snes, &mut ksp))?;
     let mut pc: p::PC = std::ptr::null_mut();
-    chk!(KSPGetPC(ksp, &mut pc))?;
+    chk!(KSPGetPC(ksp_of(snes)?, &mut pc))?;
     let mut pc_type: p::PCType = std::ptr::null();
     chk!(PCGetType(pc, &mut pc_type))?;
     // SAFETY: PETSc returns its static type name, or null.
@@ -863,21 +865,10 @@ unsafe extern "C" fn convergence_trampoline(
         cycling.at_floor = false;
         cycling.shortened = false;
     } else {
-        let mut ls: p::SNESLineSearch = std::ptr::null_mut();
-        let code = p::SNESGetLineSearch(snes, &mut ls);
+        let code = note_shortened_step(snes, &mut cycling.shortened);
         if code != 0 {
             return code;
         }
-        let (mut lambda, mut damping) = (1.0, 1.0);
-        let code = p::SNESLineSearchGetLambda(ls, &mut lambda);
-        if code != 0 {
-            return code;
-        }
-        let code = p::SNESLineSearchGetDamping(ls, &mut damping);
-        if code != 0 {
-            return code;
-        }
-        cycling.shortened |= lambda < damping;
     }
     if cycling.length > 0.0 && *reason == p::SNESConvergedReason::SNES_CONVERGED_ITERATING {
         let code = round_off_floor(snes, cycling.length, &mut cycling.floor);
@@ -899,6 +890,26 @@ unsafe extern "C" fn convergence_trampoline(
         *reason = p::SNESConvergedReason::SNES_DIVERGED_DTOL;
     }
     0
+}
+
+/// Sets `shortened` when the line search took less than the full step in the iteration just
+/// done (its step length below its damping; [`SnesOutcome::shortened`]).
+unsafe fn note_shortened_step(snes: p::SNES, shortened: &mut bool) -> p::PetscErrorCode {
+    let mut ls: p::SNESLineSearch = std::ptr::null_mut();
+    let code = p::SNESGetLineSearch(snes, &mut ls);
+    if code != 0 {
+        return code;
+    }
+    let (mut lambda, mut damping) = (1.0, 1.0);
+    let code = p::SNESLineSearchGetLambda(ls, &mut lambda);
+    if code != 0 {
+        return code;
+    }
+    let code = p::SNESLineSearchGetDamping(ls, &mut damping);
+    if code == 0 {
+        *shortened |= lambda < damping;
+    }
+    code
 }
 
 /// `ROUND_OFF_FACTOR eps |K_ii|_max (length + |u|_max)` into `floor` for the solver's current

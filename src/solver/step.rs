@@ -44,6 +44,14 @@ struct Counted {
     led: bool,
 }
 
+impl Counted {
+    /// Counts the iterations of `solve`.
+    fn add(&mut self, solve: &SnesOutcome) {
+        self.newton += solve.iterations;
+        self.linear += solve.linear_iterations;
+    }
+}
+
 /// The solves of one step.
 pub(super) struct Solved {
     /// The last solve's outcome.
@@ -171,8 +179,7 @@ impl Run<'_> {
         loop {
             let outcome = self.attempt(&mut counted, first_of_step)?;
             first_of_step = false;
-            counted.newton += outcome.iterations;
-            counted.linear += outcome.linear_iterations;
+            counted.add(&outcome);
             if !outcome.converged
                 || !self.model.is_augmented()
                 || !self.augmented(&mut counted, t_new)?
@@ -200,8 +207,7 @@ impl Run<'_> {
         self.model.set_stick_all(false);
         self.linear.snes.set_max_iterations(max_it)?;
         let pre = pre?;
-        counted.newton += pre.iterations;
-        counted.linear += pre.linear_iterations;
+        counted.add(&pre);
         if !pre.converged {
             let l = &mut self.linear;
             l.x_guess.copy_to(&mut l.x)?;
@@ -227,17 +233,7 @@ impl Run<'_> {
         };
         self.linear.x.copy_to(&mut self.linear.x_attempt)?;
         if first_of_step && self.state.lead_with_fallback {
-            counted.led = true;
-            let led = self.solve_with(line_search)?;
-            if led.converged || self.state.stop.get().is_some() {
-                self.state.lead_with_fallback = led.shortened;
-                return Ok(led);
-            }
-            counted.newton += led.iterations;
-            counted.linear += led.linear_iterations;
-            self.state.lead_with_fallback = false;
-            self.linear.x_attempt.copy_to(&mut self.linear.x)?;
-            return self.solve_once();
+            return self.led_attempt(counted, line_search);
         }
         let l = &mut self.linear;
         let max_it = l.snes.set_max_iterations(FULL_STEP_ITERATIONS)?;
@@ -252,12 +248,26 @@ impl Run<'_> {
         if first.converged || self.state.stop.get().is_some() {
             return Ok(first);
         }
-        counted.newton += first.iterations;
-        counted.linear += first.linear_iterations;
+        counted.add(&first);
         self.state.counts.fallbacks += 1;
         self.state.lead_with_fallback |= first_of_step;
         self.linear.x_attempt.copy_to(&mut self.linear.x)?;
         self.solve_with(line_search)
+    }
+
+    /// [`Run::attempt`] led by `line_search` from the start saved in `x_attempt`: full steps
+    /// get the second attempt when it fails.
+    fn led_attempt(&mut self, counted: &mut Counted, line_search: &str) -> Result<SnesOutcome> {
+        counted.led = true;
+        let led = self.solve_with(line_search)?;
+        if led.converged || self.state.stop.get().is_some() {
+            self.state.lead_with_fallback = led.shortened;
+            return Ok(led);
+        }
+        counted.add(&led);
+        self.state.lead_with_fallback = false;
+        self.linear.x_attempt.copy_to(&mut self.linear.x)?;
+        self.solve_once()
     }
 
     /// [`Run::solve_once`] with the line search `line_search`, then full steps again.
