@@ -640,6 +640,11 @@ fn step_newton_and_verification_rows() -> Vec<Row> {
             "rtol",
         ),
         check(
+            "newton_augmented_rtol_one",
+            valid_plus("[newton]\naugmented_rtol = 1.0\n"),
+            "newton.augmented_rtol",
+        ),
+        check(
             "newton_linear_solver_unknown",
             valid_plus("[newton]\nlinear_solver = \"fast\"\n"),
             "newton.linear_solver",

@@ -14,25 +14,16 @@ use std::process::Output;
 /// round-off already. SuperLU_DIST's is, so the 2-rank comparison uses it.
 const REPRODUCIBLE_ON_RANKS: &[&str] = &["-pc_factor_mat_solver_type", "superlu_dist"];
 
-/// Steps between checkpoints of the slide with `linear_solver`: a checkpoint must fall before
-/// an augmented step and a cut one ([`checkpoint_before_a_cut`]), and the two linear solvers'
-/// Newton paths cut different steps.
-fn checkpoint_every(linear_solver: &str) -> usize {
-    if linear_solver == "iterative" {
-        4
-    } else {
-        6
-    }
-}
+/// The steps between checkpoints that [`full_run`] tries, in order.
+const CHECKPOINT_EVERY: std::ops::RangeInclusive<usize> = 2..=4;
 
-/// A frictional slide (Hex8, mu 0.3) whose steps are cut (newton.max_it = 4) and augmented
-/// (Uzawa) around the kill, with a checkpoint every [`checkpoint_every`] steps.
-fn case(name: &str, linear_solver: &str) -> PathBuf {
-    let every = checkpoint_every(linear_solver);
-    let toml = common::slide_case(10)
+/// A frictional slide (Hex8, mu 0.3) in 5 steps, of which some are cut (newton.max_it = 3)
+/// and all augmented (Uzawa), with a checkpoint every `every` steps.
+fn case(name: &str, linear_solver: &str, every: usize) -> PathBuf {
+    let toml = common::slide_case(5)
         .replace("[3, 2, 1]", "[9, 6, 2]")
         .replace("[2, 2, 1]", "[6, 6, 2]")
-        + &format!("[newton]\nmax_it = 4\nlinear_solver = \"{linear_solver}\"\n")
+        + &format!("[newton]\nmax_it = 3\nlinear_solver = \"{linear_solver}\"\n")
         + &format!("[output]\ncheckpoint_every = {every}\n");
     common::write_case(name, &toml)
 }
@@ -134,34 +125,48 @@ fn run_and_kill(case: &Path, ranks: usize, out: &Path, step: usize) -> Output {
 /// without a cut and then augments and cuts the step after: the steps redone after the
 /// restart are augmented, the one killed is cut, and the first is not, so that its predictor
 /// would reuse the factorization of the step before (module docs of `solver::checkpoint`).
-fn checkpoint_before_a_cut(full: &Path, every: usize) -> usize {
+fn checkpoint_before_a_cut(full: &Path, every: usize) -> Option<usize> {
     let history = common::History::read(full);
     let (cuts, augmentations) = (history.column("cuts"), history.column("augmentations"));
     let rows = history.rows();
-    (every..rows.len() - 1)
-        .step_by(every)
-        .find(|&c| {
-            // rows[c] is step c + 1.
-            let (first, killed) = (&rows[c], &rows[c + 1]);
-            first[augmentations] > 0.0
-                && first[cuts] == 0.0
-                && killed[augmentations] > 0.0
-                && killed[cuts] > 0.0
-        })
-        .unwrap_or_else(|| panic!("no checkpoint before an augmented step and a cut one: {rows:?}"))
+    (every..rows.len() - 1).step_by(every).find(|&c| {
+        // rows[c] is step c + 1.
+        let (first, killed) = (&rows[c], &rows[c + 1]);
+        first[augmentations] > 0.0
+            && first[cuts] == 0.0
+            && killed[augmentations] > 0.0
+            && killed[cuts] > 0.0
+    })
+}
+
+/// The slide's run never stopped, with the first spacing of checkpoints in
+/// [`CHECKPOINT_EVERY`] that puts one before an augmented step and a cut one
+/// ([`checkpoint_before_a_cut`]): which steps the slide cuts moves with every change of its
+/// Newton path, and the spacing is part of the run (it goes on after a checkpoint with a new
+/// Newton solver, as a restart does). Returns the case, the run's folder and the checkpoint.
+fn full_run(ranks: usize, linear_solver: &str) -> (PathBuf, PathBuf, usize) {
+    for every in CHECKPOINT_EVERY {
+        let name = format!("restart_{ranks}_{linear_solver}_{every}");
+        let case = case(&name, linear_solver, every);
+        let full = case.parent().unwrap().join("full");
+        let done = common::run_raw(&case, ranks, &full, args(ranks));
+        assert!(
+            done.status.success(),
+            "{}",
+            String::from_utf8_lossy(&done.stderr)
+        );
+        if let Some(checkpoint) = checkpoint_before_a_cut(&full, every) {
+            return (case, full, checkpoint);
+        }
+    }
+    panic!(
+        "no spacing in {CHECKPOINT_EVERY:?} puts a checkpoint before an augmented and a cut step"
+    )
 }
 
 fn killed_and_restarted_match_the_run_never_stopped(ranks: usize, linear_solver: &str) {
-    let case = case(&format!("restart_{ranks}_{linear_solver}"), linear_solver);
+    let (case, full, checkpoint) = full_run(ranks, linear_solver);
     let dir = case.parent().unwrap();
-    let full = dir.join("full");
-    let done = common::run_raw(&case, ranks, &full, args(ranks));
-    assert!(
-        done.status.success(),
-        "{}",
-        String::from_utf8_lossy(&done.stderr)
-    );
-    let checkpoint = checkpoint_before_a_cut(&full, checkpoint_every(linear_solver));
     let killed = dir.join("killed");
     let out = run_and_kill(&case, ranks, &killed, checkpoint + 2);
     let stdout = String::from_utf8_lossy(&out.stdout);

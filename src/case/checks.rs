@@ -176,6 +176,12 @@ pub(super) fn check_run_settings(steps: &StepsSpec, n: &NewtonSpec) -> Result<()
             n.rtol, n.atol
         ));
     }
+    if !(n.augmented_rtol > 0.0 && n.augmented_rtol < 1.0) {
+        return Err(format!(
+            "newton.augmented_rtol = {}: must be in (0, 1)",
+            n.augmented_rtol
+        ));
+    }
     if !(1..=MAX_NEWTON_ITS).contains(&n.max_it) {
         return Err(format!(
             "newton.max_it = {}: must be in 1..={MAX_NEWTON_ITS}",

@@ -108,6 +108,7 @@ impl Scene {
             predictor: steps.predictor,
             predictor_reuses_newton_tangent,
             stick_predictor: steps.stick_predictor,
+            bilateral_iteration: steps.bilateral_iteration,
             continue_on_failure,
             newton: file.newton.clone(),
             vtu_every: file.output.vtu_every,

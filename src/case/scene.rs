@@ -273,6 +273,8 @@ pub struct Scene {
     pub predictor_reuses_newton_tangent: bool,
     /// Frictional steps start with a stick solve (see `solver`).
     pub stick_predictor: bool,
+    /// Contact steps start with the bilateral iteration (see `solver`).
+    pub bilateral_iteration: bool,
     /// An unconverged step is accepted and the run goes on (`steps.on_failure = "continue"`)
     /// instead of being cut.
     pub continue_on_failure: bool,

@@ -212,6 +212,14 @@ pub fn normal_pressure(lambda_n: f64, eps_n: f64, gh: f64) -> (f64, f64) {
     }
 }
 
+/// The normal law of a node in the bilateral iteration (`contact::frictional`): `p = lambda_n +
+/// eps_n gh` whatever its sign, and `dp/dgh = eps_n`. An opening pulls the node back with a
+/// tension, so that one Newton step of the bilateral problem closes what a linearization left
+/// open.
+pub fn bilateral_pressure(lambda_n: f64, eps_n: f64, gh: f64) -> (f64, f64) {
+    (lambda_n + eps_n * gh, eps_n)
+}
+
 /// [`normal_pressure`] with a touching band: a node whose `lambda_n + eps_n gh` lies in
 /// `(-eps_n touch, 0]` (a gap within `touch` of closing, e.g. surfaces that touch to round-off)
 /// gets `p = 0` but the closed derivative `dp/dgh = eps_n`. Both values of the derivative are
@@ -568,6 +576,22 @@ mod tests {
 
     fn v3(a: [f64; 3]) -> Vector3<f64> {
         Vector3::from(a)
+    }
+
+    #[test]
+    fn a_bilateral_node_is_pulled_back_where_the_law_opens_it() {
+        let (lambda, eps) = (50.0, 1e6);
+        // Open by twice the multiplier's reach: the law releases the node, the bilateral law
+        // pulls it back.
+        let gh = -2.0 * lambda / eps;
+        assert_eq!(normal_pressure_touching(lambda, eps, gh, 1e-10), (0.0, 0.0));
+        assert_eq!(bilateral_pressure(lambda, eps, gh), (-lambda, eps));
+        // Pressed: the two agree.
+        let gh = 1e-6;
+        assert_eq!(
+            bilateral_pressure(lambda, eps, gh),
+            normal_pressure(lambda, eps, gh)
+        );
     }
 
     #[test]

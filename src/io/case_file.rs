@@ -421,6 +421,13 @@ pub struct StepsSpec {
     /// steps; with the default soft sticking it is not needed (docs/performance.md).
     #[serde(default)]
     pub stick_predictor: bool,
+    /// Mortar contact with Uzawa multipliers: begin each step with one Newton iteration in
+    /// which every node pressed at the last converged step is held bilaterally (an opening
+    /// pulls it back), kept when it lowers the residual. Default true. It closes the gaps that
+    /// the predictor's linearization opens in a slide, which the penalty law alone would
+    /// leave to a creeping line search (docs/performance.md, "The bilateral iteration").
+    #[serde(default = "yes")]
+    pub bilateral_iteration: bool,
     /// What happens when a step's Newton solve does not converge and no cut is left (a failed
     /// solve is first redone with half the increment, at most `max_cuts` times; every cut is
     /// counted in `history.csv`). `"cut"` (default): the run stops. `"continue"`: the state
@@ -449,6 +456,7 @@ impl Default for StepsSpec {
             predictor: true,
             predictor_tangent: last_newton(),
             stick_predictor: false,
+            bilateral_iteration: true,
             on_failure: cut(),
         }
     }
@@ -478,6 +486,12 @@ pub struct NewtonSpec {
     /// otherwise stall once the predictor has already solved a linear step.
     #[serde(default = "default_atol")]
     pub atol: f64,
+    /// Relative residual tolerance of the Newton solves that an Uzawa augmentation follows
+    /// (with augmented contributions): those solves need only bring the state close enough
+    /// for the multipliers' update, and the step's last solve meets `rtol`. Default 1e-2;
+    /// `rtol` or less makes every solve meet `rtol`.
+    #[serde(default = "default_augmented_rtol")]
+    pub augmented_rtol: f64,
     /// Maximum Newton iterations per step. Default 25.
     #[serde(default = "default_max_it")]
     pub max_it: usize,
@@ -510,6 +524,7 @@ impl Default for NewtonSpec {
     fn default() -> Self {
         NewtonSpec {
             rtol: default_rtol(),
+            augmented_rtol: default_augmented_rtol(),
             atol: default_atol(),
             max_it: default_max_it(),
             linear_solver: LinearSolverSpec::Auto,
@@ -520,6 +535,9 @@ impl Default for NewtonSpec {
 
 fn default_rtol() -> f64 {
     1e-10
+}
+fn default_augmented_rtol() -> f64 {
+    1e-2
 }
 fn default_atol() -> f64 {
     1e-10

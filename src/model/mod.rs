@@ -268,6 +268,12 @@ pub trait Contribution {
         false
     }
 
+    /// Whether an Uzawa step can update this contribution's multipliers (`uzawa_max > 0`
+    /// somewhere; plain penalty cannot).
+    fn takes_uzawa_updates(&self) -> bool {
+        false
+    }
+
     /// One Uzawa step after a converged Newton solve at `at`, the `done`-th of the step
     /// (*collective*).
     fn augment(&mut self, _at: &State, _done: usize, _world: &SimpleCommunicator) -> Augmentation {
@@ -304,6 +310,15 @@ pub trait Contribution {
 
     /// The stick predictor: every pressed node sticks whatever its Coulomb cone while on.
     fn set_stick_all(&self, _on: bool) {}
+
+    /// The bilateral iteration: every node this contribution can hold bilaterally (a mortar
+    /// contact node with a normal multiplier) is so held while on.
+    fn set_bilateral(&self, _on: bool) {}
+
+    /// Whether this rank's part of the contribution has a node the bilateral iteration binds.
+    fn has_bilateral_nodes(&self) -> bool {
+        false
+    }
 
     /// Lines on the last Newton iteration's state of this contribution, for the
     /// `-contact_monitor` option (*collective*; only rank 0's are printed).
@@ -379,6 +394,11 @@ impl Model {
         self.parts.iter().any(|c| c.is_augmented())
     }
 
+    /// Whether some contribution can take Uzawa updates.
+    pub fn takes_uzawa_updates(&self) -> bool {
+        self.parts.iter().any(|c| c.takes_uzawa_updates())
+    }
+
     /// Whether some contribution has a Coulomb law.
     pub fn is_frictional(&self) -> bool {
         self.parts.iter().any(|c| c.is_frictional())
@@ -387,6 +407,16 @@ impl Model {
     /// The stick predictor on or off for every contribution.
     pub fn set_stick_all(&self, on: bool) {
         self.parts.iter().for_each(|c| c.set_stick_all(on));
+    }
+
+    /// The bilateral iteration's law on or off for every contribution.
+    pub fn set_bilateral(&self, on: bool) {
+        self.parts.iter().for_each(|c| c.set_bilateral(on));
+    }
+
+    /// Whether some contribution has a node the bilateral iteration binds on this rank.
+    pub fn has_bilateral_nodes(&self) -> bool {
+        self.parts.iter().any(|c| c.has_bilateral_nodes())
     }
 
     /// One Uzawa step of every contribution (*collective*): updated if any updated, else

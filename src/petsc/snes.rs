@@ -549,6 +549,23 @@ impl Snes {
         Ok(old.max(0) as usize)
     }
 
+    /// The relative tolerance of the next solves (the other tolerances are kept); returns the
+    /// previous value.
+    pub fn set_relative_tolerance(&mut self, rtol: f64) -> Result<f64> {
+        let (mut atol, mut old, mut stol) = (0.0, 0.0, 0.0);
+        let (mut max_it, mut max_f): (PetscInt, PetscInt) = (0, 0);
+        chk!(SNESGetTolerances(
+            self.raw,
+            &mut atol,
+            &mut old,
+            &mut stol,
+            &mut max_it,
+            &mut max_f
+        ))?;
+        chk!(SNESSetTolerances(self.raw, atol, rtol, stol, max_it, max_f))?;
+        Ok(old)
+    }
+
     /// Makes the next solves take at least one Newton iteration even when the first residual
     /// is already below the tolerances (after an Uzawa update, say).
     pub fn force_iteration(&mut self, on: bool) -> Result<()> {

@@ -21,9 +21,13 @@
 //!
 //! Each step's Newton starts from the load-step predictor (`predictor`, `steps.predictor`),
 //! which halves the Newton iterations of displacement-driven steps and removes the cuts that a
-//! large prescribed increment otherwise causes. After a converged solve, the augmented
+//! large prescribed increment otherwise causes. With contact multipliers, the step's first
+//! Newton iteration is the bilateral iteration (`steps.bilateral_iteration`; module docs of
+//! `contact::frictional`), kept when it lowers the residual. After a converged solve, the augmented
 //! contributions take an Uzawa step, and the step is solved again until they meet their
-//! tolerances (`step`).
+//! tolerances (`step`). Those solves stop at `newton.augmented_rtol`; once the tolerances are
+//! met, a last solve meets `newton.rtol` and they are checked again (docs/theory.md section
+//! 4, "Loose solves between augmentations").
 //!
 //! After each converged step: reactions on the constrained sets (summed over ranks), one VTU
 //! file per rank, the PVTU and PVD written by rank 0 once all pieces exist, and a history row

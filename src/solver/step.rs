@@ -42,6 +42,8 @@ struct Counted {
     linear: usize,
     /// The step's first solve started with the fallback line search.
     led: bool,
+    /// The step began with a bilateral iteration, kept (`true`) or undone.
+    bilateral: Option<bool>,
 }
 
 impl Counted {
@@ -168,28 +170,117 @@ impl Run<'_> {
         )
     }
 
-    /// The step's solves: the stick predictor, then attempts and Uzawa augmentations until the
-    /// augmented contributions meet their tolerances.
+    /// The step's solves: the bilateral iteration and the stick predictor, then attempts and Uzawa
+    /// augmentations until the augmented contributions meet their tolerances. Where they take
+    /// updates, the solves stop at `newton.augmented_rtol` until the tolerances are met, and a
+    /// last solve meets `newton.rtol` (docs/theory.md section 4).
     fn solve_step(&mut self, t_new: f64) -> Result<Solved> {
         let mut counted = Counted::default();
+        if self.cx.scene.bilateral_iteration {
+            self.bilateral_iteration(&mut counted, t_new)?;
+        }
         if self.cx.scene.stick_predictor && self.model.is_frictional() {
             self.stick_predictor(&mut counted)?;
         }
+        let augmented = self.model.is_augmented();
+        let mut loose = self.model.takes_uzawa_updates();
         let mut first_of_step = true;
         loop {
-            let outcome = self.attempt(&mut counted, first_of_step)?;
+            let rtol = if loose { self.loosen()? } else { None };
+            let outcome = self.attempt(&mut counted, first_of_step);
+            if let Some(rtol) = rtol {
+                self.linear.snes.set_relative_tolerance(rtol)?;
+            }
+            let outcome = outcome?;
             first_of_step = false;
             counted.add(&outcome);
-            if !outcome.converged
-                || !self.model.is_augmented()
-                || !self.augmented(&mut counted, t_new)?
-            {
+            if !outcome.converged || !augmented {
                 return Ok(Solved { outcome, counted });
             }
-            // The new multipliers change the residual by little once the gap is small: still
-            // take one Newton step, so that the displacements follow.
-            self.linear.snes.force_iteration(true)?;
+            let last = rtol.is_none();
+            if self.augmented(&mut counted, t_new, last)? {
+                // The new multipliers change the residual by little once the gap is small:
+                // still take one Newton step, so that the displacements follow.
+                self.linear.snes.force_iteration(true)?;
+                loose = true;
+            } else if last {
+                return Ok(Solved { outcome, counted });
+            } else {
+                // Within the tolerances after a loose solve: the step's last solve meets
+                // `newton.rtol`, and the multipliers are checked again at its result.
+                self.linear.snes.force_iteration(false)?;
+                loose = false;
+            }
         }
+    }
+
+    /// Sets the Newton solves' relative tolerance to `newton.augmented_rtol` when that is the
+    /// looser one; returns the tolerance to restore, if so.
+    fn loosen(&mut self) -> Result<Option<f64>> {
+        let loose = self.cx.scene.newton.augmented_rtol;
+        let rtol = self.linear.snes.set_relative_tolerance(loose)?;
+        if rtol >= loose {
+            self.linear.snes.set_relative_tolerance(rtol)?;
+            return Ok(None);
+        }
+        Ok(Some(rtol))
+    }
+
+    /// The bilateral iteration (`contact::frictional`, "Bilateral iteration"): one Newton
+    /// iteration in which every node pressed at the last converged step is held bilaterally.
+    /// It is kept when the law's residual at its result is below the residual at the step's
+    /// start, and undone otherwise; its iteration counts either way. Nothing when no rank has
+    /// such a node (*collective*).
+    fn bilateral_iteration(&mut self, counted: &mut Counted, t: f64) -> Result<()> {
+        let local = self.model.has_bilateral_nodes() as i32;
+        let mut any = 0;
+        self.cx
+            .world
+            .all_reduce_into(&local, &mut any, SystemOperation::max());
+        if any == 0 {
+            return Ok(());
+        }
+        let before = self.residual_norm(t)?;
+        let l = &mut self.linear;
+        l.x.copy_to(&mut l.x_guess)?;
+        self.model.set_bilateral(true);
+        let max_it = self.linear.snes.set_max_iterations(1)?;
+        let solve = self.solve_once();
+        self.model.set_bilateral(false);
+        self.linear.snes.set_max_iterations(max_it)?;
+        counted.add(&solve?);
+        let after = self.residual_norm(t)?;
+        let kept = matches!((before, after), (Some(b), Some(a)) if a < b);
+        if !kept {
+            let l = &mut self.linear;
+            l.x_guess.copy_to(&mut l.x)?;
+            // Nodes that truly lift off, or a bilateral step that inverted an element: the
+            // step is one whose full Newton steps fail like the bilateral one.
+            self.state.lead_with_fallback = true;
+        }
+        counted.bilateral = Some(kept);
+        if self.contact_monitor && self.cx.rank == 0 {
+            let norm = |n: Option<f64>| n.map_or("-".to_string(), |n| format!("{n:.3e}"));
+            let verdict = if kept { "kept" } else { "undone" };
+            println!(
+                "    bilateral iteration {verdict}: |F| {} -> {}",
+                norm(before),
+                norm(after)
+            );
+        }
+        Ok(())
+    }
+
+    /// `|F(x; t)|` at the current iterate, `None` where some rank cannot evaluate it
+    /// (*collective*).
+    fn residual_norm(&self, t: f64) -> Result<Option<f64>> {
+        let ev = Evaluation {
+            cx: &self.cx,
+            model: &self.model,
+        };
+        ev.residual_at(&self.linear.x, t)?
+            .map(|f| f.norm2())
+            .transpose()
     }
 
     /// The stick predictor (see `contact::frictional`): solve with every pressed node
@@ -340,8 +431,9 @@ impl Run<'_> {
     }
 
     /// After a converged solve: one Uzawa step of the augmented contributions. Returns true
-    /// when they updated their multipliers (solve again).
-    fn augmented(&mut self, counted: &mut Counted, t_new: f64) -> Result<bool> {
+    /// when they updated their multipliers (solve again). A cap reached after a solve that is
+    /// not the step's `last` (a loose one) is said after the last.
+    fn augmented(&mut self, counted: &mut Counted, t_new: f64, last: bool) -> Result<bool> {
         let mut ev = self.cx.evaluator.borrow_mut();
         ev.load(self.cx.scene, &self.cx.dofs, &self.linear.x)?;
         let at = ev.state(self.cx.scene);
@@ -350,6 +442,7 @@ impl Run<'_> {
             .augment(&at, counted.augmentations, &self.cx.world);
         match step.outcome {
             Augmented::Converged => Ok(false),
+            Augmented::CapReached if !last => Ok(false),
             Augmented::CapReached => {
                 self.state.counts.uzawa_capped += 1;
                 if self.cx.rank == 0 {
@@ -594,9 +687,14 @@ impl Run<'_> {
             (true, Some(line_search)) => format!(", started with {line_search}"),
             _ => String::new(),
         };
+        let bilateral = match solved.counted.bilateral {
+            Some(true) => ", bilateral",
+            Some(false) => ", bilateral undone",
+            None => "",
+        };
         self.say(format!(
             "  step {step} load {load:.6}: {} Newton its{uzawa}, |F| {residual:.3e}{floor}, {} \
-             linear its{led}{}, {:.2} s",
+             linear its{bilateral}{led}{}, {:.2} s",
             solved.counted.newton,
             solved.counted.linear,
             retries_note(

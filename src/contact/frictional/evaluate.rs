@@ -6,7 +6,9 @@ use std::collections::BTreeMap;
 use std::rc::Rc;
 
 use crate::case::ContactMethod;
-use crate::contact::law::{normal_pressure_touching, tangential_law, LawParams};
+use crate::contact::law::{
+    bilateral_pressure, normal_pressure_touching, tangential_law, LawParams,
+};
 use crate::contact::mortar::{
     integrate_pair, integrate_pair_linearized, traction_node_count, FaceGeom, IntegrationOptions,
     LinearizedWeights, PalletSplit, RejectStats, TractionScheme,
@@ -64,13 +66,13 @@ impl ContactInterface {
     /// What an evaluation of this interface needs at positions `x` (old positions `x_old`).
     pub(crate) fn context<'a>(
         &self,
-        stick_all: bool,
+        modes: LawModes,
         x: &'a [[f64; 3]],
         x_old: &'a [[f64; 3]],
     ) -> EvalContext<'a> {
         EvalContext {
             iface_mu: self.mu,
-            stick_all,
+            modes,
             scheme: self.scheme,
             degree: self.quadrature_degree,
             pallets: self.pallets,
@@ -113,7 +115,7 @@ impl ContactInterfaces {
             let mut stats = RejectStats::default();
             // A pass this rank holds no node of costs it nothing (not even its normals).
             for pass in iface.passes.iter().filter(|p| !p.held.is_empty()) {
-                let ctx = iface.context(self.stick_all.get(), &x, &self.x_old);
+                let ctx = iface.context(self.modes.get(), &x, &self.x_old);
                 let failure = match pass.method {
                     ContactMethod::NodeOnSegment => {
                         pass.node_on_segment_blocks(&ctx, &evaluation, sink)?
@@ -237,11 +239,21 @@ impl ContactPass {
     }
 }
 
+/// How an evaluation's law departs from the nodal law of the module docs (both off: the law
+/// itself).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct LawModes {
+    /// The stick predictor: pressed nodes stick whatever their cone.
+    pub(crate) stick_all: bool,
+    /// The bilateral iteration: a node with a normal multiplier is held bilaterally
+    /// ([`crate::contact::law::bilateral_pressure`]).
+    pub(crate) bilateral: bool,
+}
+
 /// What one evaluation of a pass needs besides the pass.
 pub(crate) struct EvalContext<'a> {
     pub(crate) iface_mu: f64,
-    /// The stick predictor is on: pressed nodes stick whatever their cone.
-    pub(crate) stick_all: bool,
+    pub(crate) modes: LawModes,
     pub(crate) scheme: TractionScheme,
     pub(crate) degree: Option<usize>,
     pub(crate) pallets: PalletSplit,
@@ -454,8 +466,11 @@ impl ContactPass {
         let gh = dot(nu, kin.gap) / kin.area;
         let coverage = coverage_scale(kin.area, full.value);
         let prm = self.law_params(st, ctx.iface_mu, ctx.scale, coverage.unwrap_or(1.0));
-        let (p, dp_dgh) =
-            normal_pressure_touching(st.history.lambda_n, prm.eps_n, gh, TOUCH_TOLERANCE * st.h);
+        let (p, dp_dgh) = if ctx.modes.bilateral && st.history.lambda_n > 0.0 {
+            bilateral_pressure(st.history.lambda_n, prm.eps_n, gh)
+        } else {
+            normal_pressure_touching(st.history.lambda_n, prm.eps_n, gh, TOUCH_TOLERANCE * st.h)
+        };
         Some(NormalLaw {
             full,
             gh,
@@ -534,7 +549,7 @@ impl ContactPass {
             }
             _ => [0.0; 3],
         };
-        let band = (TOUCH_TOLERANCE * st.h, ctx.stick_all);
+        let band = (TOUCH_TOLERANCE * st.h, ctx.modes.stick_all);
         let fr = tangential_law(&st.history, &prm, nu, (p, dp_dgh), dsh, band);
         let t: [f64; 3] = std::array::from_fn(|c| p * nu[c] + fr.traction[c]);
         fields = NodeFields {

@@ -97,7 +97,7 @@ impl ContactInterfaces {
             return Vec::new();
         }
         let x = at.positions();
-        let ctx = iface.context(self.stick_all.get(), &x, &self.x_old);
+        let ctx = iface.context(self.modes.get(), &x, &self.x_old);
         if p.method == ContactMethod::NodeOnSegment {
             let tree = p.primary_tree(&x);
             return p

@@ -135,6 +135,20 @@
 //! start from the direction of the tangential traction that sticking would need. The solver uses
 //! it when `steps.stick_predictor` is set.
 //!
+//! # Bilateral iteration
+//!
+//! With the bilateral mode on (`Contribution::set_bilateral`), every mortar node with a normal
+//! multiplier (`lambda_A > 0`: pressed at the last converged step) takes `p_A = lambda_A +
+//! eps_N gh_A` whatever its sign, with `dp/dgh = eps_N` (law::bilateral_pressure): a node that
+//! an iterate opened is pulled back by a tension instead of being released. Friction is the
+//! law's on the resulting pressure: a node in tension takes the touching band's friction, no
+//! traction and the stick tangent, which is not the derivative of its residual (deliberately:
+//! docs/theory.md section 6). Otherwise the tangent above differentiates whichever normal law
+//! the node took. The solver uses it for one Newton iteration at the start of a step
+//! (`steps.bilateral_iteration`): in a slide, the predictor's linearized gaps miss by more than
+//! the multiplier's reach `lambda_A / eps_N`, every pressed node opens, and from there the
+//! penalty law gives Newton no contact stiffness to close them with (docs/theory.md section 6).
+//!
 //! # Parallel layout
 //!
 //! The mesh is replicated and every rank gathers the displacements of every contact surface
@@ -206,7 +220,7 @@ use std::cell::{Cell, RefCell};
 
 use mpi::topology::SimpleCommunicator;
 
-use crate::case::{InterfaceKind, Scene, UzawaRelaxation};
+use crate::case::{ContactMethod, InterfaceKind, Scene, UzawaRelaxation};
 use crate::contact::block_sum::BlockSum;
 use crate::contact::mortar::{PalletSplit, RejectStats, TractionScheme};
 use crate::dofs::DofMap;
@@ -219,7 +233,7 @@ use crate::petsc::log::Section;
 
 pub use changes::StateChanges;
 pub use coverage::{coverage_fade, coverage_scale, COVERED_TOL, FADE_COVERAGE, MIN_COVERAGE};
-pub(crate) use evaluate::{EvalContext, Evaluation};
+pub(crate) use evaluate::{EvalContext, Evaluation, LawModes};
 pub(crate) use fields::status_code;
 pub use fields::NodeFields;
 pub(crate) use pass::ContactPass;
@@ -298,8 +312,8 @@ pub struct ContactInterfaces {
     pub interfaces: Vec<ContactInterface>,
     /// Positions of every node at the last converged step.
     x_old: Vec<[f64; 3]>,
-    /// Every pressed node sticks (the stick predictor), whatever its Coulomb cone.
-    stick_all: Cell<bool>,
+    /// The stick predictor's and the bilateral iteration's departures from the law.
+    modes: Cell<LawModes>,
     /// Where the time of the residual and tangent evaluations goes.
     pub timings: ContactTimings,
     /// The state a cut step returns to ([`Contribution::save`]).
@@ -383,7 +397,7 @@ impl ContactInterfaces {
         let mut contact = ContactInterfaces {
             interfaces,
             x_old: scene.mesh.coords.clone(),
-            stick_all: Default::default(),
+            modes: Default::default(),
             timings: ContactTimings::default(),
             saved: None,
             history: Vec::new(),
@@ -467,6 +481,10 @@ impl Contribution for ContactInterfaces {
         true
     }
 
+    fn takes_uzawa_updates(&self) -> bool {
+        self.interfaces.iter().any(|i| i.uzawa_max > 0)
+    }
+
     fn augment(&mut self, at: &State, done: usize, world: &SimpleCommunicator) -> Augmentation {
         let (outcome, violation) = self.uzawa_step(at, done, world);
         Augmentation {
@@ -514,7 +532,27 @@ impl Contribution for ContactInterfaces {
     }
 
     fn set_stick_all(&self, on: bool) {
-        self.stick_all.set(on);
+        self.modes.set(LawModes {
+            stick_all: on,
+            ..self.modes.get()
+        });
+    }
+
+    fn set_bilateral(&self, on: bool) {
+        self.modes.set(LawModes {
+            bilateral: on,
+            ..self.modes.get()
+        });
+    }
+
+    fn has_bilateral_nodes(&self) -> bool {
+        self.interfaces.iter().flat_map(|i| &i.passes).any(|pass| {
+            pass.method == ContactMethod::Mortar
+                && pass
+                    .held
+                    .iter()
+                    .any(|&a| pass.state[a].history.lambda_n > 0.0)
+        })
     }
 
     fn iteration_report(&self, world: &SimpleCommunicator) -> Vec<String> {

@@ -54,7 +54,7 @@ impl ContactInterfaces {
                 .iter()
                 .filter(|p| !p.held.is_empty() && p.method == ContactMethod::Mortar);
             for pass in mortar {
-                let ctx = iface.context(self.stick_all.get(), &x, &self.x_old);
+                let ctx = iface.context(self.modes.get(), &x, &self.x_old);
                 fraction = fraction.min(pass.reach_fraction(&ctx, &dx));
             }
         }

@@ -282,7 +282,7 @@ fn tangent_linearizes_only_the_faces_of_pressed_nodes() {
     .positions();
     let iface = &contact.interfaces[0];
     let pass = &iface.passes[0];
-    let ctx = iface.context(false, &x, &contact.x_old);
+    let ctx = iface.context(Default::default(), &x, &contact.x_old);
     let normals = pass.normals(&x).unwrap();
     let values = pass.values_at(&ctx, None, &mut RejectStats::default());
     let (_, kinematics) = pass.measured(&ctx, &values);
@@ -301,6 +301,66 @@ fn tangent_linearizes_only_the_faces_of_pressed_nodes() {
     };
     assert_eq!(skipped.len(), 4, "skipped faces {skipped:?}");
     assert!(skipped.iter().all(|s| column(s) == (0.75, 1.0)));
+}
+
+/// The bilateral iteration's law ([`partly_covered_blocks`] with the upper block lifted 0.02,
+/// so that the surfaces stand 0.01 apart, and a normal multiplier of 1 000 where one is given;
+/// `eps_N = 4e5`, so `lambda_n + eps_N gh = -3 000`): the law leaves every node open; in the
+/// bilateral iteration the nodes with a multiplier are pressed (the faces carrying them
+/// linearized: the column of faces at the right edge) and those without stay open; off again,
+/// nothing is pressed.
+#[test]
+fn the_bilateral_iteration_presses_only_nodes_with_a_multiplier() {
+    use crate::model::Contribution;
+    let scene = partly_covered_blocks();
+    let mesh = &scene.mesh;
+    let up = mesh.bodies.iter().position(|b| b == "up").unwrap();
+    let mut u = vec![0.0; 3 * mesh.num_nodes()];
+    for e in (0..mesh.num_elements()).filter(|&e| mesh.body[e] == up) {
+        for &n in mesh.element_nodes(e) {
+            u[3 * n + 2] = 0.02;
+        }
+    }
+    let x = State {
+        scene: &scene,
+        u: &u,
+        t: 1.0,
+    }
+    .positions();
+    let mut contact = on_one_rank(&scene);
+    let pressed = |contact: &ContactInterfaces| {
+        let iface = &contact.interfaces[0];
+        let pass = &iface.passes[0];
+        let ctx = iface.context(contact.modes.get(), &x, &contact.x_old);
+        let normals = pass.normals(&x).unwrap();
+        let values = pass.values_at(&ctx, None, &mut RejectStats::default());
+        let (_, kinematics) = pass.measured(&ctx, &values);
+        pass.pressed_faces(&ctx, &normals, &kinematics)
+    };
+    assert!(!contact.has_bilateral_nodes());
+    contact.set_bilateral(true);
+    assert!(
+        pressed(&contact).is_empty(),
+        "bilateral without multipliers"
+    );
+    // A multiplier on the nodes of the column at x = 1 (wholly covered).
+    let pass = &mut contact.interfaces[0].passes[0];
+    let column: Vec<usize> = (0..pass.nodes.len())
+        .filter(|&a| mesh.coords[pass.nodes[a]][0] == 1.0)
+        .collect();
+    column
+        .iter()
+        .for_each(|&a| pass.state[a].history.lambda_n = 1000.0);
+    assert!(contact.has_bilateral_nodes());
+    let bilateral: BTreeSet<usize> = pressed(&contact).into_iter().collect();
+    let pass = &contact.interfaces[0].passes[0];
+    let column_faces: BTreeSet<usize> = column
+        .iter()
+        .flat_map(|&a| pass.node_faces[a].iter().map(|&(s, _)| s))
+        .collect();
+    assert_eq!(bilateral, column_faces);
+    contact.set_bilateral(false);
+    assert!(pressed(&contact).is_empty(), "pressed by the law");
 }
 
 /// The fade is 0 up to MIN_COVERAGE, 1 from FADE_COVERAGE on, increasing between, with a

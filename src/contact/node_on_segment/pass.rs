@@ -111,7 +111,7 @@ impl ContactPass {
             params: self.law_params(st, ctx.iface_mu, ctx.scale, 1.0),
             touch: TOUCH_TOLERANCE * st.h,
             area: st.a_full,
-            stick_all: ctx.stick_all,
+            stick_all: ctx.modes.stick_all,
         };
         let Some(c) = node_contribution(&geo, &law, tangent) else {
             return (None, NodeFields::default());

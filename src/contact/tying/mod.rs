@@ -392,6 +392,10 @@ impl Contribution for TiedInterfaces {
         true
     }
 
+    fn takes_uzawa_updates(&self) -> bool {
+        self.interfaces.iter().any(|t| t.uzawa_max > 0)
+    }
+
     fn augment(&mut self, at: &State, done: usize, world: &SimpleCommunicator) -> Augmentation {
         let (outcome, gap) = self.uzawa_step(at.u, done, world);
         Augmentation {
