@@ -15,7 +15,7 @@ use std::process::Output;
 const REPRODUCIBLE_ON_RANKS: &[&str] = &["-pc_factor_mat_solver_type", "superlu_dist"];
 
 /// The steps between checkpoints that [`full_run`] tries, in order.
-const CHECKPOINT_EVERY: std::ops::RangeInclusive<usize> = 2..=4;
+const CHECKPOINT_EVERY: std::ops::RangeInclusive<usize> = 2..=3;
 
 /// A frictional slide (Hex8, mu 0.3) in 5 steps, of which some are cut (newton.max_it = 3)
 /// and all augmented (Uzawa), with a checkpoint every `every` steps.

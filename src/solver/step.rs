@@ -227,10 +227,11 @@ impl Run<'_> {
     }
 
     /// The bilateral iteration (`contact::frictional`, "Bilateral iteration"): one Newton
-    /// iteration in which every node pressed at the last converged step is held bilaterally.
-    /// It is kept when the law's residual at its result is below the residual at the step's
-    /// start, and undone otherwise; its iteration counts either way. Nothing when no rank has
-    /// such a node (*collective*).
+    /// iteration in which every node with a normal multiplier (pressed at the last converged
+    /// step) is held bilaterally. It is kept when the law's residual at its result is below
+    /// the residual at the step's start, and undone otherwise, the step's first solve then led
+    /// by the fallback line search (not in a cut step); its iteration counts either way.
+    /// Nothing when no rank has such a node (*collective*).
     fn bilateral_iteration(&mut self, counted: &mut Counted, t: f64) -> Result<()> {
         let local = self.model.has_bilateral_nodes() as i32;
         let mut any = 0;
@@ -248,15 +249,23 @@ impl Run<'_> {
         let solve = self.solve_once();
         self.model.set_bilateral(false);
         self.linear.snes.set_max_iterations(max_it)?;
-        counted.add(&solve?);
+        let solve = solve?;
+        counted.add(&solve);
+        if solve.iterations == 0 {
+            // The start already met the tolerances: nothing was tried.
+            return Ok(());
+        }
         let after = self.residual_norm(t)?;
         let kept = matches!((before, after), (Some(b), Some(a)) if a < b);
         if !kept {
             let l = &mut self.linear;
             l.x_guess.copy_to(&mut l.x)?;
             // Nodes that truly lift off, or a bilateral step that inverted an element: the
-            // step is one whose full Newton steps fail like the bilateral one.
-            self.state.lead_with_fallback = true;
+            // step is one whose full Newton steps fail like the bilateral one. (A cut step
+            // tries full steps first, as after a failed led solve.)
+            if self.fallback_line_search.is_some() && self.state.cuts_in_row == 0 {
+                self.state.lead_with_fallback = true;
+            }
         }
         counted.bilateral = Some(kept);
         if self.contact_monitor && self.cx.rank == 0 {
