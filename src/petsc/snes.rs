@@ -79,6 +79,16 @@ pub struct Tolerances {
     pub max_it: usize,
 }
 
+/// SNES's tolerances as `SNESGetTolerances` gives them.
+#[derive(Clone, Copy, Default)]
+struct SnesTolerances {
+    atol: f64,
+    rtol: f64,
+    stol: f64,
+    max_it: PetscInt,
+    max_f: PetscInt,
+}
+
 /// The linear solver of `snes`.
 fn ksp_of(snes: p::SNES) -> Result<p::KSP> {
     let mut ksp: p::KSP = std::ptr::null_mut();
@@ -533,36 +543,36 @@ impl Snes {
     /// The largest number of Newton iterations of the next solves (the other tolerances are
     /// kept); returns the previous value.
     pub fn set_max_iterations(&mut self, max_it: usize) -> Result<usize> {
-        let (mut atol, mut rtol, mut stol) = (0.0, 0.0, 0.0);
-        let (mut old, mut max_f): (PetscInt, PetscInt) = (0, 0);
-        chk!(SNESGetTolerances(
-            self.raw, &mut atol, &mut rtol, &mut stol, &mut old, &mut max_f
-        ))?;
-        chk!(SNESSetTolerances(
-            self.raw,
-            atol,
-            rtol,
-            stol,
-            super::to_petsc_int(max_it)?,
-            max_f
-        ))?;
-        Ok(old.max(0) as usize)
+        let max_it = super::to_petsc_int(max_it)?;
+        let old = self.change_tolerances(|t| t.max_it = max_it)?;
+        Ok(old.max_it.max(0) as usize)
     }
 
     /// The relative tolerance of the next solves (the other tolerances are kept); returns the
     /// previous value.
     pub fn set_relative_tolerance(&mut self, rtol: f64) -> Result<f64> {
-        let (mut atol, mut old, mut stol) = (0.0, 0.0, 0.0);
-        let (mut max_it, mut max_f): (PetscInt, PetscInt) = (0, 0);
+        Ok(self.change_tolerances(|t| t.rtol = rtol)?.rtol)
+    }
+
+    /// Applies `change` to SNES's tolerances; returns them as they were.
+    fn change_tolerances(
+        &mut self,
+        change: impl FnOnce(&mut SnesTolerances),
+    ) -> Result<SnesTolerances> {
+        let mut t = SnesTolerances::default();
         chk!(SNESGetTolerances(
             self.raw,
-            &mut atol,
-            &mut old,
-            &mut stol,
-            &mut max_it,
-            &mut max_f
+            &mut t.atol,
+            &mut t.rtol,
+            &mut t.stol,
+            &mut t.max_it,
+            &mut t.max_f
         ))?;
-        chk!(SNESSetTolerances(self.raw, atol, rtol, stol, max_it, max_f))?;
+        let old = t;
+        change(&mut t);
+        chk!(SNESSetTolerances(
+            self.raw, t.atol, t.rtol, t.stol, t.max_it, t.max_f
+        ))?;
         Ok(old)
     }
 

@@ -17,6 +17,11 @@ pub fn lowest_rank_with(world: &SimpleCommunicator, flag: bool) -> i32 {
     lowest
 }
 
+/// *Collective*: whether `flag` holds on some rank.
+pub(crate) fn any_rank(world: &SimpleCommunicator, flag: bool) -> bool {
+    lowest_rank_with(world, flag) < world.size()
+}
+
 /// *Collective*: the `text` of the lowest rank that has one, on every rank (`None` when no
 /// rank has one).
 pub(crate) fn first_rank_text(world: &SimpleCommunicator, text: Option<&str>) -> Option<String> {

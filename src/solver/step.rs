@@ -13,6 +13,7 @@ use crate::model::Augmented;
 use crate::petsc::{CallbackError, SnesOutcome, StepLimitFn, Vector};
 
 use super::assembly;
+use super::collective::any_rank;
 use super::cut::{cut_limit, describe, what_to_change};
 use super::evaluation::{Evaluation, Verdict};
 use super::predictor::{predict, NewtonTangent};
@@ -139,11 +140,7 @@ impl Run<'_> {
             .linear
             .pattern
             .add(&self.cx.dofs, &at, moving.iter().map(|c| c.as_ref()));
-        let mut any = 0i32;
-        self.cx
-            .world
-            .all_reduce_into(&(grew as i32), &mut any, SystemOperation::max());
-        if any > 0 {
+        if any_rank(&self.cx.world, grew) {
             let linear = &mut self.linear;
             linear.jac = new_matrix(&linear.pattern, &self.cx.dofs, &linear.rigid_modes)?;
             linear.jac.allow_new_nonzeros()?;
@@ -233,12 +230,7 @@ impl Run<'_> {
     /// by the fallback line search (not in a cut step); its iteration counts either way.
     /// Nothing when no rank has such a node (*collective*).
     fn bilateral_iteration(&mut self, counted: &mut Counted, t: f64) -> Result<()> {
-        let local = self.model.has_bilateral_nodes() as i32;
-        let mut any = 0;
-        self.cx
-            .world
-            .all_reduce_into(&local, &mut any, SystemOperation::max());
-        if any == 0 {
+        if !any_rank(&self.cx.world, self.model.has_bilateral_nodes()) {
             return Ok(());
         }
         let before = self.residual_norm(t)?;
