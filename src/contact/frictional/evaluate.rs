@@ -575,6 +575,11 @@ impl ContactPass {
         let applied = t.map(|v| fade * v);
         block.add_forces(self, terms, applied);
         if tangent {
+            // A node the bilateral iteration holds in tension (the only way to `p < 0`)
+            // linearizes its tension's geometric terms as zero (module docs, "Bilateral
+            // iteration"); the traction the tangent carries is then its friction's alone.
+            let (p, t) = if p < 0.0 { (0.0, fr.traction) } else { (p, t) };
+            let carried = t.map(|v| fade * v);
             let lin = Linearization {
                 nu,
                 gap: kin.gap,
@@ -588,7 +593,7 @@ impl ContactPass {
                 friction: (ctx.iface_mu > 0.0).then_some(&fr),
                 slip_history,
             };
-            block.add_tangent((self, ctx, normals), node, terms, &lin, applied);
+            block.add_tangent((self, ctx, normals), node, terms, &lin, carried);
         }
         (Some(block.into_block()), fields)
     }

@@ -303,6 +303,19 @@ fn tangent_linearizes_only_the_faces_of_pressed_nodes() {
     assert!(skipped.iter().all(|s| column(s) == (0.75, 1.0)));
 }
 
+/// The displacements of [`partly_covered_blocks`] with the upper block lifted by 0.02.
+fn upper_lifted(scene: &Scene) -> Vec<f64> {
+    let mesh = &scene.mesh;
+    let up = mesh.bodies.iter().position(|b| b == "up").unwrap();
+    let mut u = vec![0.0; 3 * mesh.num_nodes()];
+    for e in (0..mesh.num_elements()).filter(|&e| mesh.body[e] == up) {
+        for &n in mesh.element_nodes(e) {
+            u[3 * n + 2] = 0.02;
+        }
+    }
+    u
+}
+
 /// The bilateral iteration's law ([`partly_covered_blocks`] with the upper block lifted 0.02,
 /// so that the surfaces stand 0.01 apart, and a normal multiplier of 1 000 where one is given;
 /// `eps_N = 4e5`, so `lambda_n + eps_N gh = -3 000`): the law leaves every node open; in the
@@ -314,13 +327,7 @@ fn the_bilateral_iteration_presses_only_nodes_with_a_multiplier() {
     use crate::model::Contribution;
     let scene = partly_covered_blocks();
     let mesh = &scene.mesh;
-    let up = mesh.bodies.iter().position(|b| b == "up").unwrap();
-    let mut u = vec![0.0; 3 * mesh.num_nodes()];
-    for e in (0..mesh.num_elements()).filter(|&e| mesh.body[e] == up) {
-        for &n in mesh.element_nodes(e) {
-            u[3 * n + 2] = 0.02;
-        }
-    }
+    let u = upper_lifted(&scene);
     let x = State {
         scene: &scene,
         u: &u,
@@ -361,6 +368,68 @@ fn the_bilateral_iteration_presses_only_nodes_with_a_multiplier() {
     assert_eq!(bilateral, column_faces);
     contact.set_bilateral(false);
     assert!(pressed(&contact).is_empty(), "pressed by the law");
+}
+
+/// A dof-indexed dense copy of the blocks a tangent adds.
+#[derive(Default)]
+struct DenseTangent(std::collections::BTreeMap<(usize, usize), f64>);
+
+impl crate::model::TangentSink for DenseTangent {
+    fn add_block(&mut self, rows: &[usize], cols: &[usize], values: &[f64]) -> crate::Result<()> {
+        let n = 3 * cols.len();
+        for (r, &a) in rows.iter().enumerate() {
+            for (c, &b) in cols.iter().enumerate() {
+                for (i, j) in (0..3).flat_map(|i| (0..3).map(move |j| (i, j))) {
+                    let v = values[(3 * r + i) * n + 3 * c + j];
+                    *self.0.entry((3 * a + i, 3 * b + j)).or_default() += v;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A node the bilateral iteration holds in tension linearizes only the penalty's pull: its
+/// tension's geometric terms (the turning normal, the changing weights) are left out, so its
+/// tangent is the same whatever the multiplier, as long as the node stays in tension.
+/// ([`partly_covered_blocks`] lifted 0.02 as above, the column at x = 1 with the multiplier
+/// 1 000 or 2 000: tensions of 3 000 and 2 000. With the geometric terms the two tangents
+/// differ by 1 000 times them.)
+#[test]
+fn a_node_held_in_tension_linearizes_only_the_penalty() {
+    use crate::model::Contribution;
+    let scene = partly_covered_blocks();
+    let mesh = &scene.mesh;
+    let u = upper_lifted(&scene);
+    let at = State {
+        scene: &scene,
+        u: &u,
+        t: 1.0,
+    };
+    let tangent_with = |lambda_n: f64| {
+        let mut contact = on_one_rank(&scene);
+        let pass = &mut contact.interfaces[0].passes[0];
+        for a in 0..pass.nodes.len() {
+            if mesh.coords[pass.nodes[a]][0] == 1.0 {
+                pass.state[a].history.lambda_n = lambda_n;
+            }
+        }
+        contact.set_bilateral(true);
+        let mut tangent = DenseTangent::default();
+        assert!(contact.jacobian(&at, &mut tangent).unwrap().is_none());
+        tangent.0
+    };
+    let (low, high) = (tangent_with(1000.0), tangent_with(2000.0));
+    assert!(!low.is_empty(), "the held nodes have a tangent");
+    let largest = low.values().fold(0.0f64, |m, v| m.max(v.abs()));
+    let keys: BTreeSet<_> = low.keys().chain(high.keys()).collect();
+    for k in keys {
+        let (a, b) = (low.get(k).unwrap_or(&0.0), high.get(k).unwrap_or(&0.0));
+        assert!(
+            (a - b).abs() <= 1e-12 * largest,
+            "dofs {k:?}: {a} against {b} (largest entry {largest})"
+        );
+    }
 }
 
 /// The fade is 0 up to MIN_COVERAGE, 1 from FADE_COVERAGE on, increasing between, with a
