@@ -129,11 +129,11 @@
 //!
 //! # Stick predictor
 //!
-//! With the stick predictor on (`Contribution::set_stick_all`) every pressed node sticks whatever its cone (the
-//! law is called with `mu = infinity`): a smooth problem whose solution is a good start for the
-//! Coulomb law, because the nodes that truly stick are already in place and those that slip
-//! start from the direction of the tangential traction that sticking would need. The solver uses
-//! it when `steps.stick_predictor` is set.
+//! With the stick predictor on (`Contribution::set_stick_all`) every pressed node sticks
+//! whatever its cone (the law is called with `mu = infinity`): a smooth problem whose
+//! solution is a good start for the Coulomb law, because the nodes that truly stick are
+//! already in place and those that slip start from the direction of the tangential traction
+//! that sticking would need. The solver uses it when `steps.stick_predictor` is set.
 //!
 //! # Bilateral iteration
 //!
@@ -143,12 +143,12 @@
 //! an iterate opened is pulled back by a tension instead of being released. Friction is the
 //! law's on the resulting pressure: a node in tension takes the touching band's friction, no
 //! traction and the stick tangent, which is not the derivative of its residual (deliberately:
-//! docs/theory.md section 6). Nor are its tension's geometric terms: in the tangent above a
-//! node in tension carries no pressure (`p d nu` and `d n1 t`, `d n2 t` with `p = 0`), only
-//! the penalty's `dp = eps_N d gh` that pulls it back; where the contact ends, a tension's
-//! geometric terms would make the step move the edges by a sizeable part of an element.
-//! Otherwise the tangent above differentiates whichever normal law the node took. The solver
-//! uses it for one Newton iteration at the start of a step
+//! docs/theory.md section 6). Nor does its tangent carry its tension's geometric terms: in
+//! the tangent above a node in tension has no pressure (`p d nu`, `d n1 t`, `d n2 t` and a
+//! fading node's `t dr` with `p = 0`; its friction is zero in tension), only the penalty's
+//! `dp = eps_N d gh` that pulls it back (why: docs/performance.md, "The tension's geometric
+//! terms"). Otherwise the tangent above differentiates whichever normal law the node took.
+//! The solver uses it for one Newton iteration at the start of a step
 //! (`steps.bilateral_iteration`): in a slide, the predictor's linearized gaps miss by more than
 //! the multiplier's reach `lambda_A / eps_N`, every pressed node opens, and from there the
 //! penalty law gives Newton no contact stiffness to close them with (docs/theory.md section 6).

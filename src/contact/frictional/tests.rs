@@ -393,8 +393,9 @@ impl crate::model::TangentSink for DenseTangent {
 /// tension's geometric terms (the turning normal, the changing weights) are left out, so its
 /// tangent is the same whatever the multiplier, as long as the node stays in tension.
 /// ([`partly_covered_blocks`] lifted 0.02 as above, the column at x = 1 with the multiplier
-/// 1 000 or 2 000: tensions of 3 000 and 2 000. With the geometric terms the two tangents
-/// differ by 1 000 times them.)
+/// 1 000 or 2 000: tensions of 3 000 and 2 000 at its covered nodes, more at its partly
+/// covered one. With the geometric terms the two tangents would differ by 1 000 times those
+/// terms.)
 #[test]
 fn a_node_held_in_tension_linearizes_only_the_penalty() {
     use crate::model::Contribution;
