@@ -3,6 +3,7 @@
 //! - The automatic choice: the frictional slide of `common::slide_case` solved directly below
 //!   the crossover and iteratively from it on, as its first lines say; both converge to the same
 //!   state.
+//! - The iterative path sets its multigrid up once per load step, not per Newton iteration.
 //! - The iterative path on the smallest level of the refinement family
 //!   (`cases/refinement/hex8_1.toml`, 8 028 free dofs; release mode:
 //!   `cargo test --release --test linear_solver`): GMRES with an exact solve on the interface's
@@ -76,6 +77,49 @@ fn auto_solves_directly_below_the_crossover_and_iteratively_from_it() {
     );
     let d = common::max_rel_difference_of_runs(&direct, &iterative);
     assert!(d < 1e-8, "iterative against direct: {d:e}");
+}
+
+/// The calls of a PETSc event (the first number of its line) in the stage `stage` of a
+/// `-log_view` report; 0 when the stage does not list it.
+fn event_count(log_view: &str, stage: &str, event: &str) -> usize {
+    log_view
+        .lines()
+        .skip_while(|l| !(l.starts_with("--- Event Stage") && l.ends_with(&format!(": {stage}"))))
+        .skip(1)
+        .take_while(|l| !l.starts_with("--- Event Stage"))
+        .find_map(|l| {
+            let mut fields = l.split_whitespace();
+            (fields.next() == Some(event)).then(|| fields.next().unwrap().parse().unwrap())
+        })
+        .unwrap_or(0)
+}
+
+/// The iterative path sets the bulk's multigrid up once per load step, at its first Newton
+/// iteration, and keeps it whole through the step's other Newton iterations and Uzawa
+/// augmentations (PETSc's `PCSetUp_GAMG+` event in the `solve` stage), where the interface's
+/// factorization is redone at every Newton iteration.
+#[test]
+fn the_multigrid_is_set_up_once_per_load_step() {
+    let slide = case(
+        "multigrid_per_step",
+        &with_newton(&common::slide_case(4), "direct_below = 1"),
+    );
+    let (out, log_view) = common::run_case(&slide, 1, &["-q", "-log_view"]);
+    let history = common::History::read(&out);
+    let newton = history.column("newton_its");
+    let newton: Vec<f64> = history.rows().iter().map(|r| r[newton]).collect();
+    let steps_solved = newton.iter().filter(|&&n| n > 0.0).count();
+    let newton_its: f64 = newton.iter().sum();
+    assert!(
+        newton_its as usize > 2 * steps_solved,
+        "{newton_its} Newton iterations in {steps_solved} steps: too few to tell"
+    );
+    let set_ups = event_count(&log_view, "solve", "PCSetUp_GAMG+");
+    assert_eq!(
+        set_ups, steps_solved,
+        "multigrid set-ups in the solves, against the steps that took a Newton iteration \
+         ({newton_its} Newton iterations)"
+    );
 }
 
 /// A composite preconditioner whose first part is a field split (the split, then multigrid on

@@ -106,8 +106,9 @@ const EW_RTOL_MAX: &str = "1e-3";
 
 /// The options that say whether GAMG keeps its interpolation from one set-up to the next, on
 /// the whole matrix or on the interface split's bulk field. PETSc's default keeps it for as
-/// long as the matrix lives (here the whole run); the iterative path instead builds it anew
-/// once per load step ([`super::Snes::rebuild_multigrid`]), unless the user gives one of these.
+/// long as the matrix lives (here the whole run); the iterative path instead sets the multigrid
+/// up anew once per load step and keeps it whole through the step
+/// ([`super::Snes::rebuild_multigrid`]), unless the user gives one of these.
 pub(crate) const MULTIGRID_REUSE: [&str; 2] = [
     "-pc_gamg_reuse_interpolation",
     "-fieldsplit_bulk_pc_gamg_reuse_interpolation",

@@ -176,9 +176,9 @@ struct Context<'a> {
 enum Multigrid {
     /// Whatever the options say (the direct path, or the user's own reuse option).
     AsTheOptionsSay,
-    /// Build the interpolation anew.
+    /// Set it up anew: interpolation, coarse operators, smoothers.
     Rebuild,
-    /// Keep the interpolation, redo the coarse operators (Galerkin products) only.
+    /// Keep it whole as last set up: no set-up at all.
     Keep,
 }
 
@@ -434,11 +434,12 @@ impl Snes {
 
     /// On the iterative path (unless the user's options say whether GAMG reuses its
     /// interpolation, `ksp::MULTIGRID_REUSE`): the preconditioner's multigrid (GAMG on the
-    /// whole matrix, or on a field of the field split) builds its interpolation anew at the
-    /// set-up after the next Jacobian, and keeps it at the later ones, redoing only its coarse
-    /// operators, until this is called again. Called once per load step, the interpolation
-    /// follows the deformation at the price of one full set-up per step, not per Newton
-    /// iteration; PETSc's default would keep the first set-up's for the whole run.
+    /// whole matrix, or on a field of the field split) is set up anew after the next Jacobian,
+    /// and kept whole at the later ones (interpolation, coarse operators and smoothers: no
+    /// set-up; the rest of the preconditioner, the interface's factorization, is set up at
+    /// every Jacobian) until this is called again. Called once per load step, the multigrid
+    /// follows the deformation at the price of one set-up per step, not per Newton iteration;
+    /// PETSc's default would keep the first set-up's interpolation for the whole run.
     pub fn rebuild_multigrid(&mut self) {
         if self.multigrid != Multigrid::AsTheOptionsSay {
             self.multigrid = Multigrid::Rebuild;
@@ -767,9 +768,10 @@ unsafe extern "C" fn jacobian_trampoline(
 }
 
 /// Tells the multigrid of `snes`'s preconditioner (GAMG on the whole matrix, or GAMG in any
-/// field of a field split) whether its next set-up keeps its interpolation (`keep`) or builds
-/// it anew. Does nothing to other preconditioners, nor to a field whose type is not set yet
-/// (before the split's first set-up, which builds everything anyway).
+/// field of a field split) whether its next set-up keeps it whole (`keep`: no set-up) or sets
+/// it up anew, interpolation included. Does nothing to other preconditioners, nor to a field
+/// whose type is not set yet (before the split's first set-up, which builds everything
+/// anyway).
 fn set_multigrid_reuse(snes: p::SNES, keep: bool) -> Result<()> {
     let (pc, pc_type) = preconditioner_of(snes)?;
     let flag = if keep {
@@ -782,8 +784,10 @@ fn set_multigrid_reuse(snes: p::SNES, keep: bool) -> Result<()> {
         _ => vec![pc],
     };
     for pc in pcs {
-        // A no-op on a preconditioner that is not GAMG.
-        chk!(PCGAMGSetReuseInterpolation(pc, flag))?;
+        if pc_type_name(pc)? == "gamg" {
+            chk!(PCGAMGSetReuseInterpolation(pc, flag))?;
+            chk!(PCSetReusePreconditioner(pc, flag))?;
+        }
     }
     Ok(())
 }
@@ -792,10 +796,15 @@ fn set_multigrid_reuse(snes: p::SNES, keep: bool) -> Result<()> {
 fn preconditioner_of(snes: p::SNES) -> Result<(p::PC, String)> {
     let mut pc: p::PC = std::ptr::null_mut();
     chk!(KSPGetPC(ksp_of(snes)?, &mut pc))?;
+    Ok((pc, pc_type_name(pc)?))
+}
+
+/// The type name of the preconditioner `pc` (empty before one is set).
+fn pc_type_name(pc: p::PC) -> Result<String> {
     let mut pc_type: p::PCType = std::ptr::null();
     chk!(PCGetType(pc, &mut pc_type))?;
     // SAFETY: PETSc returns its static type name, or null.
-    Ok((pc, unsafe { type_name(pc_type) }))
+    Ok(unsafe { type_name(pc_type) })
 }
 
 /// The preconditioners of the fields of the field split `pc`; none for a Schur complement
@@ -859,10 +868,7 @@ fn fieldsplit_within(pc: p::PC, pc_type: &str) -> Result<Option<p::PC>> {
             for k in 0..n {
                 let mut sub: p::PC = std::ptr::null_mut();
                 chk!(PCCompositeGetPC(pc, k, &mut sub))?;
-                let mut sub_type: p::PCType = std::ptr::null();
-                chk!(PCGetType(sub, &mut sub_type))?;
-                // SAFETY: PETSc returns its static type name, or null.
-                if unsafe { type_name(sub_type) } == "fieldsplit" {
+                if pc_type_name(sub)? == "fieldsplit" {
                     return Ok(Some(sub));
                 }
             }

@@ -31,8 +31,8 @@
 //! evaluation are those of the run that wrote the checkpoint. What the linear solver built is
 //! not in a file: the factorization the next step's predictor reuses under
 //! `steps.predictor_tangent = "last_newton"`, and what a preconditioner keeps from one set-up
-//! to the next (GAMG keeps its interpolation through a load step, `Snes::rebuild_multigrid`,
-//! and under the user's own options for as long as the matrix lives).
+//! to the next (GAMG keeps its whole set-up through a load step, `Snes::rebuild_multigrid`,
+//! and under the user's own options its interpolation for as long as the matrix lives).
 //! So after a checkpoint the run goes on as a restart from it would: with a new matrix of the
 //! same pattern (and on the iterative path a new Newton solver), the next step's predictor
 //! assembling the tangent at the converged state. (A checkpoint written at a stop that is not one of
