@@ -36,8 +36,19 @@ pub fn write_case(name: &str, toml: &str) -> PathBuf {
 
 /// The `mortar` binary, with the MPI environment every run needs here.
 pub fn mortar_command() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_mortar"));
+    let mut c = one_process();
     mpi_env(&mut c);
+    c
+}
+
+/// The `mortar` binary as one process (no mpirun), started with SIGINT's default action: a
+/// test suite started in the background by a script inherits SIGINT ignored, which `mortar`
+/// keeps ignoring (`src/interrupt.rs`), and the tests of Ctrl-C would find it ignored. The
+/// process is `env`'s, which then becomes `mortar` (same pid).
+fn one_process() -> Command {
+    let mut c = Command::new("env");
+    c.arg("--default-signal=INT")
+        .arg(env!("CARGO_BIN_EXE_mortar"));
     c
 }
 
@@ -126,12 +137,11 @@ pub fn subcommand(
     out_dir: &Path,
     args: &[&str],
 ) -> Command {
-    let exe = env!("CARGO_BIN_EXE_mortar");
     let mut cmd = if ranks == 1 {
-        Command::new(exe)
+        one_process()
     } else {
         let mut c = mpirun(ranks, MPIRUN_TIMEOUT);
-        c.arg(exe);
+        c.arg(env!("CARGO_BIN_EXE_mortar"));
         c
     };
     mpi_env(&mut cmd)
