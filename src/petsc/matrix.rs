@@ -135,6 +135,13 @@ impl Matrix {
         ))
     }
 
+    /// How many times PETSc reallocated this rank's rows for entries added outside the
+    /// preallocated pattern, over the matrix's life (`MatGetInfo`'s `mallocs`: the inserts of
+    /// each assembly, counted when it ends). Each reallocation copies the rank's whole block.
+    pub fn mallocs(&self) -> Result<u64> {
+        Ok(local_info(self.raw)?.mallocs as u64)
+    }
+
     /// Wraps a matrix PETSc passes to a callback, taking a reference so that drop is balanced.
     ///
     /// # Safety
@@ -290,4 +297,16 @@ impl Drop for NullSpace {
             ));
         }
     }
+}
+
+/// `MatGetInfo` of this rank's part of `mat` (`MAT_LOCAL`).
+pub(super) fn local_info(mat: p::Mat) -> Result<p::MatInfo> {
+    let mut info = std::mem::MaybeUninit::<p::MatInfo>::uninit();
+    chk!(MatGetInfo(
+        mat,
+        p::MatInfoType::MAT_LOCAL,
+        info.as_mut_ptr()
+    ))?;
+    // SAFETY: MatGetInfo filled `info`.
+    Ok(unsafe { info.assume_init() })
 }

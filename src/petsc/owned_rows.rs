@@ -235,14 +235,8 @@ impl HeldBlock {
     /// True if the rows are stored back to back (`starts[rows]` = the entries in use): so after
     /// an assembly, not after an insertion outside the pattern, which leaves room at row ends.
     fn is_compact(&self) -> Result<bool> {
-        let mut info = std::mem::MaybeUninit::<p::MatInfo>::uninit();
-        chk!(MatGetInfo(
-            self.mat,
-            p::MatInfoType::MAT_LOCAL,
-            info.as_mut_ptr()
-        ))?;
-        // SAFETY: MatGetInfo filled `info`; `starts` has `rows + 1` entries.
-        let used = unsafe { info.assume_init() }.nz_used;
+        let used = super::matrix::local_info(self.mat)?.nz_used;
+        // SAFETY: `starts` has `rows + 1` entries.
         let stored = unsafe { *self.starts.add(self.rows as usize) };
         Ok(stored as f64 == used)
     }

@@ -45,6 +45,8 @@ struct Counted {
     led: bool,
     /// The step began with a bilateral iteration, kept (`true`) or undone.
     bilateral: Option<bool>,
+    /// Reallocations of the matrix for tangent entries outside its pattern, over all ranks.
+    mallocs: u64,
 }
 
 impl Counted {
@@ -88,21 +90,31 @@ impl Run<'_> {
         let lead_at_start = self.state.lead_with_fallback;
         self.update_pattern(t)?;
         self.model.save();
-        self.cx.evaluator.borrow_mut().assembly_seconds = 0.0;
+        {
+            let mut ev = self.cx.evaluator.borrow_mut();
+            (ev.assembly_seconds, ev.mallocs) = (0.0, 0);
+        }
         // The contributions' timed work of this step's evaluations, the predictor's included.
         let timed_before = self.model.phase_seconds();
         let started = Instant::now();
+        // Seconds inside the step's timing that belong to no solve: the pattern's update at the
+        // predicted end of the step (untimed, as at the step's start).
+        let mut untimed = 0.0;
         if self.cx.scene.predictor {
             self.predict(t, t_new)?;
+            let update = Instant::now();
+            self.update_pattern(t_new)?;
+            untimed = update.elapsed().as_secs_f64();
         }
         self.cx.evaluator.borrow_mut().t = t_new;
         self.linear.snes.rebuild_multigrid();
         let solve_stage = self.phases.push("solve")?;
-        let solved = self.solve_step(t_new)?;
+        let mut solved = self.solve_step(t_new)?;
         self.linear.snes.force_iteration(false)?;
         drop(solve_stage);
         self.state.counts.newton += solved.counted.newton;
-        let seconds = self.account_time(started, &timed_before);
+        let seconds = self.account_time(started, untimed, &timed_before);
+        solved.counted.mallocs = self.step_mallocs();
         self.check_null_pivots(t_new)?;
         if solved.outcome.converged {
             return self.finish_step(&solved, t_new, seconds, false);
@@ -120,8 +132,20 @@ impl Run<'_> {
         self.cut(&solved.outcome, t_new)
     }
 
+    /// The reallocations of this step's tangents, summed over the ranks (*collective*).
+    fn step_mallocs(&self) -> u64 {
+        let mine = self.cx.evaluator.borrow().mallocs;
+        let mut all = 0;
+        self.cx
+            .world
+            .all_reduce_into(&mine, &mut all, SystemOperation::sum());
+        all
+    }
+
     /// The contributions whose pattern moves with the displacements add the couplings of the
-    /// state at load `t`; a new matrix when the pattern grew on some rank (*collective*).
+    /// state at load `t` (at a step's start, and at the predicted end of the step, so that
+    /// the pattern holds the pairs of a step that slides farther than its margin); a new
+    /// matrix when the pattern grew on some rank (*collective*).
     fn update_pattern(&mut self, t: f64) -> Result<()> {
         let moving: Vec<_> = self
             .model
@@ -466,14 +490,16 @@ impl Run<'_> {
     }
 
     /// Adds the step's evaluation and solve times to the phases; the contributions' timed
-    /// parts of assembly apart (`timed_before`: their totals at the step's start).
+    /// parts of assembly apart (`timed_before`: their totals at the step's start); `untimed`
+    /// seconds since `started` belong to neither.
     fn account_time(
         &mut self,
         started: Instant,
+        untimed: f64,
         timed_before: &std::collections::BTreeMap<&'static str, f64>,
     ) -> StepSeconds {
         let assembly = self.cx.evaluator.borrow().assembly_seconds;
-        let total = started.elapsed().as_secs_f64();
+        let total = started.elapsed().as_secs_f64() - untimed;
         self.phases.add("assembly", assembly);
         self.phases.add("solve", (total - assembly).max(0.0));
         let mut timed = 0.0;
@@ -688,6 +714,10 @@ impl Run<'_> {
             (true, Some(line_search)) => format!(", started with {line_search}"),
             _ => String::new(),
         };
+        let mallocs = match solved.counted.mallocs {
+            0 => String::new(),
+            n => format!(", {n} reallocation(s) for tangent entries outside the matrix pattern"),
+        };
         let bilateral = match solved.counted.bilateral {
             Some(true) => ", bilateral",
             Some(false) => ", bilateral undone",
@@ -695,7 +725,7 @@ impl Run<'_> {
         };
         self.say(format!(
             "  step {step} load {load:.6}: {} Newton its{uzawa}, |F| {residual:.3e}{floor}, {} \
-             linear its{bilateral}{led}{}, {:.2} s",
+             linear its{bilateral}{led}{}{mallocs}, {:.2} s",
             solved.counted.newton,
             solved.counted.linear,
             retries_note(

@@ -1,6 +1,7 @@
 //! Check 8 of the PETSc layer's tests, shared by `petsc_layer.rs` (one rank) and
 //! `petsc_layer_two_ranks.rs` (two): blocks added straight into the stored rows give the
-//! matrix of `MatSetValues` bit for bit.
+//! matrix of `MatSetValues` bit for bit; the entries outside the pattern are counted as
+//! reallocations (`Matrix::mallocs`) once.
 
 use mortar::petsc::{Matrix, Petsc, Sparsity};
 
@@ -52,6 +53,8 @@ pub fn owned_rows_match_set_values(petsc: &Petsc) {
     let build = |direct: bool| -> Vec<f64> {
         let mut m = Matrix::new_aij(&pattern).unwrap();
         m.allow_new_nonzeros().unwrap();
+        assert_eq!(m.mallocs().unwrap(), 0, "a new matrix on rank {rank}");
+        let mut mallocs = Vec::new();
         for _ in 0..2 {
             // Twice: the second sum lands on the values of the first assembly. Within one
             // assembly the blocks come twice, the second time after the entries outside the
@@ -79,7 +82,12 @@ pub fn owned_rows_match_set_values(petsc: &Petsc) {
                 }
             }
             m.assemble().unwrap();
+            mallocs.push(m.mallocs().unwrap());
         }
+        // Every rank owns rows or columns of the entries outside the pattern: its rows were
+        // reallocated in the first assembly, and not in the second, which found them stored.
+        assert!(mallocs[0] > 0, "no reallocation counted on rank {rank}");
+        assert_eq!(mallocs[1], mallocs[0], "reallocations on rank {rank}");
         let owned: Vec<i32> = (first..end).collect();
         let all: Vec<i32> = (0..ROWS).collect();
         m.get_values(&owned, &all).unwrap()

@@ -184,11 +184,11 @@
 //! # Matrix pattern
 //!
 //! The pattern of a node's block is every node of the faces carrying it and of the primary faces
-//! their search finds. At the start of each step, the contact contribution hands the solver the
-//! blocks of the pairs found with a search margin of [`PATTERN_MARGIN`] face sizes, twice the
-//! margin the evaluations use ([`EVAL_MARGIN`]); the solver rebuilds the matrix when the pattern
-//! grows. A pair that still falls outside the pattern inside a step costs PETSc a reallocation,
-//! not an error.
+//! their search finds. At the start of each step and at its predicted end, the contact
+//! contribution hands the solver the blocks of the pairs found with a search margin of
+//! [`PATTERN_MARGIN`] face sizes, twice the margin the evaluations use ([`EVAL_MARGIN`]); the
+//! solver rebuilds the matrix when the pattern grows. A pair that still falls outside the pattern
+//! inside a step costs PETSc a reallocation, not an error.
 //!
 //! # Modules
 //!
