@@ -1,11 +1,11 @@
 //! The contact's matrix pattern against a slide of more than its margin per step, in release
 //! mode: `cargo test --release --test matrix_pattern`.
 //!
-//! The pattern holds the pairs found at a step's start within a margin of the secondary faces'
-//! size, and at the predicted end of the step (`steps.predictor`). A step that slides farther
-//! than that margin would pair faces outside it, and PETSc would reallocate the matrix for
-//! those entries at every Newton iteration that finds new ones (each reallocation copies the
-//! rank's whole block): the progress line of such a step counts them.
+//! The pattern holds the pairs found at a step's start within a margin of one secondary-face
+//! box diagonal, and at the predicted end of the step (with `steps.predictor`, the default). A
+//! step that slides farther than that margin would pair faces outside it, and PETSc would
+//! reallocate the matrix's rows for those entries at every Newton iteration that finds new
+//! ones: the progress line of such a step counts the entries.
 
 mod common;
 
@@ -29,29 +29,29 @@ fn long_steps_slide() -> String {
     text
 }
 
-/// The steps whose progress line counts reallocations outside the matrix pattern.
-fn steps_with_reallocations(stdout: &str) -> Vec<&str> {
+/// The progress lines (steps and cuts) that count tangent entries outside the matrix pattern.
+fn lines_outside_the_pattern(stdout: &str) -> Vec<&str> {
     stdout
         .lines()
-        .filter(|l| l.contains("outside the matrix pattern"))
+        .filter(|l| l.contains(" tangent entries outside the matrix pattern"))
         .collect()
 }
 
-/// With the predictor (the default) the pattern holds every pair of the slide: no step
-/// reallocates (without the pattern at the predicted end of each step, step 5 reallocates 15
-/// times). Without the predictor the same slide does reallocate, and says so: the slide does
-/// reach past the margin, and the count is reported.
+/// With the predictor (the default) the pattern holds every pair of the slide: no step adds
+/// an entry outside it (without the pattern at the predicted end of each step, step 5 adds
+/// some). Without the predictor the same slide does, and says so: the slide reaches past the
+/// margin of the start's pattern.
 #[test]
 #[cfg_attr(
     debug_assertions,
     ignore = "release only: cargo test --release --test matrix_pattern"
 )]
-fn a_slide_past_the_pattern_margin_reallocates_nothing() {
+fn a_slide_past_the_pattern_margin_stays_inside_the_predicted_pattern() {
     let predicted = long_steps_slide();
     let case = common::write_case("pattern_predicted", &predicted);
     let (_, stdout) = common::run_case(&case, 1, &[]);
     assert_eq!(
-        steps_with_reallocations(&stdout),
+        lines_outside_the_pattern(&stdout),
         Vec::<&str>::new(),
         "with the predictor"
     );
@@ -59,16 +59,8 @@ fn a_slide_past_the_pattern_margin_reallocates_nothing() {
     let unpredicted = common::with_step_option(&predicted, "predictor = false");
     let case = common::write_case("pattern_unpredicted", &unpredicted);
     let (_, stdout) = common::run_case(&case, 1, &[]);
-    let found = steps_with_reallocations(&stdout);
-    assert!(!found.is_empty(), "without the predictor:\n{stdout}");
-    for line in found {
-        let count: u64 = line
-            .split(", ")
-            .find_map(|part| {
-                part.strip_suffix(" reallocation(s) for tangent entries outside the matrix pattern")
-            })
-            .and_then(|n| n.parse().ok())
-            .unwrap_or_else(|| panic!("no count in: {line}"));
-        assert!(count > 0, "{line}");
-    }
+    assert!(
+        !lines_outside_the_pattern(&stdout).is_empty(),
+        "without the predictor:\n{stdout}"
+    );
 }

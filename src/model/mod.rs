@@ -239,7 +239,7 @@ pub trait Contribution {
     }
 
     /// Whether [`Contribution::couplings`] depend on the displacements (asked again at the
-    /// start of every step) or only on the mesh (asked once).
+    /// start of every step and at its predicted end) or only on the mesh (asked once).
     fn pattern_moves(&self) -> bool {
         false
     }

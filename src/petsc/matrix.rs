@@ -135,11 +135,12 @@ impl Matrix {
         ))
     }
 
-    /// How many times PETSc reallocated this rank's rows for entries added outside the
-    /// preallocated pattern, over the matrix's life (`MatGetInfo`'s `mallocs`: the inserts of
-    /// each assembly, counted when it ends). Each reallocation copies the rank's whole block.
-    pub fn mallocs(&self) -> Result<u64> {
-        Ok(local_info(self.raw)?.mallocs as u64)
+    /// The entries this rank's rows store (`MatGetInfo`'s `nz_used`): the preallocated pattern
+    /// and every entry added outside it since, once assembled. It never shrinks (PETSc's own
+    /// count of reallocations, `mallocs`, restarts when an assembly rebuilds the off-diagonal
+    /// block for a new column).
+    pub fn stored_entries(&self) -> Result<u64> {
+        Ok(local_info(self.raw)?.nz_used as u64)
     }
 
     /// Wraps a matrix PETSc passes to a callback, taking a reference so that drop is balanced.

@@ -23,9 +23,9 @@ pub(super) struct Evaluator {
     pub t: f64,
     /// Seconds of residual and tangent assembly since the last reset.
     pub assembly_seconds: f64,
-    /// This rank's reallocations for tangent entries outside the matrix pattern since the last
-    /// reset ([`Matrix::mallocs`]).
-    pub mallocs: u64,
+    /// Tangent entries this rank's rows gained outside the matrix pattern since the last reset
+    /// ([`Matrix::stored_entries`]; PETSc reallocates the rows for them).
+    pub outside_pattern: u64,
 }
 
 impl Evaluator {
@@ -35,7 +35,7 @@ impl Evaluator {
             u: vec![0.0; 3 * nodes],
             t: 1.0,
             assembly_seconds: 0.0,
-            mallocs: 0,
+            outside_pattern: 0,
         }
     }
 
@@ -91,14 +91,14 @@ impl Evaluation<'_> {
         Ok(domain_check(&self.cx.world, issue))
     }
 
-    /// `dF/du (x; t)` into `jac`, as [`Evaluation::residual`]; counts the reallocations it
-    /// caused.
+    /// `dF/du (x; t)` into `jac`, as [`Evaluation::residual`]; counts the entries it added
+    /// outside the matrix pattern.
     pub fn jacobian(&self, x: &Vector, jac: &mut Matrix) -> Result<Verdict> {
-        let before = jac.mallocs()?;
+        let before = jac.stored_entries()?;
         let issue = self.timed(x, |at| {
             assembly::jacobian(self.model, at, &self.cx.dofs, jac)
         })?;
-        self.cx.evaluator.borrow_mut().mallocs += jac.mallocs()?.saturating_sub(before);
+        self.cx.evaluator.borrow_mut().outside_pattern += jac.stored_entries()? - before;
         Ok(domain_check(&self.cx.world, issue))
     }
 

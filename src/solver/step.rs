@@ -45,8 +45,8 @@ struct Counted {
     led: bool,
     /// The step began with a bilateral iteration, kept (`true`) or undone.
     bilateral: Option<bool>,
-    /// Reallocations of the matrix for tangent entries outside its pattern, over all ranks.
-    mallocs: u64,
+    /// Tangent entries added outside the matrix pattern, over all ranks.
+    outside_pattern: u64,
 }
 
 impl Counted {
@@ -92,7 +92,7 @@ impl Run<'_> {
         self.model.save();
         {
             let mut ev = self.cx.evaluator.borrow_mut();
-            (ev.assembly_seconds, ev.mallocs) = (0.0, 0);
+            (ev.assembly_seconds, ev.outside_pattern) = (0.0, 0);
         }
         // The contributions' timed work of this step's evaluations, the predictor's included.
         let timed_before = self.model.phase_seconds();
@@ -114,7 +114,7 @@ impl Run<'_> {
         drop(solve_stage);
         self.state.counts.newton += solved.counted.newton;
         let seconds = self.account_time(started, untimed, &timed_before);
-        solved.counted.mallocs = self.step_mallocs();
+        solved.counted.outside_pattern = self.step_outside_pattern();
         self.check_null_pivots(t_new)?;
         if solved.outcome.converged {
             return self.finish_step(&solved, t_new, seconds, false);
@@ -129,12 +129,13 @@ impl Run<'_> {
         if self.accepts_unconverged(&solved.outcome)? {
             return self.finish_step(&solved, t_new, seconds, true);
         }
-        self.cut(&solved.outcome, t_new)
+        self.cut(&solved, t_new)
     }
 
-    /// The reallocations of this step's tangents, summed over the ranks (*collective*).
-    fn step_mallocs(&self) -> u64 {
-        let mine = self.cx.evaluator.borrow().mallocs;
+    /// The tangent entries this step added outside the matrix pattern, over the ranks
+    /// (*collective*).
+    fn step_outside_pattern(&self) -> u64 {
+        let mine = self.cx.evaluator.borrow().outside_pattern;
         let mut all = 0;
         self.cx
             .world
@@ -546,7 +547,8 @@ impl Run<'_> {
 
     /// A step whose solve did not converge: back to the step's start, and the same step again
     /// at half the size, or the run gives up when no cut is left.
-    fn cut(&mut self, outcome: &SnesOutcome, t_new: f64) -> Result<StepEnd> {
+    fn cut(&mut self, solved: &Solved, t_new: f64) -> Result<StepEnd> {
+        let outcome = &solved.outcome;
         let why = outcome
             .domain_error
             .clone()
@@ -559,10 +561,11 @@ impl Run<'_> {
         self.state.cut();
         self.restore()?;
         self.say(format!(
-            "  step {} load {:.6}: not converged ({why}) after {} Newton its; {}",
+            "  step {} load {:.6}: not converged ({why}) after {} Newton its{}; {}",
             self.state.step + 1,
             Load(t_new),
             outcome.iterations,
+            outside_pattern_note(solved.counted.outside_pattern),
             match &limit {
                 Some(limit) => limit.clone(),
                 None => format!("cut {}/{max_cuts}", self.state.cuts_in_row),
@@ -714,10 +717,7 @@ impl Run<'_> {
             (true, Some(line_search)) => format!(", started with {line_search}"),
             _ => String::new(),
         };
-        let mallocs = match solved.counted.mallocs {
-            0 => String::new(),
-            n => format!(", {n} reallocation(s) for tangent entries outside the matrix pattern"),
-        };
+        let outside = outside_pattern_note(solved.counted.outside_pattern);
         let bilateral = match solved.counted.bilateral {
             Some(true) => ", bilateral",
             Some(false) => ", bilateral undone",
@@ -725,7 +725,7 @@ impl Run<'_> {
         };
         self.say(format!(
             "  step {step} load {load:.6}: {} Newton its{uzawa}, |F| {residual:.3e}{floor}, {} \
-             linear its{bilateral}{led}{}{mallocs}, {:.2} s",
+             linear its{bilateral}{led}{}{outside}, {:.2} s",
             solved.counted.newton,
             solved.counted.linear,
             retries_note(
@@ -735,5 +735,14 @@ impl Run<'_> {
             ),
             seconds.total
         ));
+    }
+}
+
+/// A progress line's note on the tangent entries a step added outside the matrix pattern
+/// (empty when none): each costs PETSc a reallocation of the rows it lands in.
+fn outside_pattern_note(entries: u64) -> String {
+    match entries {
+        0 => String::new(),
+        n => format!(", {n} tangent entries outside the matrix pattern"),
     }
 }

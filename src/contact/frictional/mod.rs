@@ -184,8 +184,8 @@
 //! # Matrix pattern
 //!
 //! The pattern of a node's block is every node of the faces carrying it and of the primary faces
-//! their search finds. At the start of each step and at its predicted end, the contact
-//! contribution hands the solver the blocks of the pairs found with a search margin of
+//! their search finds. At the start of each step and at its predicted end (the load-step
+//! predictor's iterate, with `steps.predictor`), the contact contribution hands the solver the blocks of the pairs found with a search margin of
 //! [`PATTERN_MARGIN`] face sizes, twice the margin the evaluations use ([`EVAL_MARGIN`]); the
 //! solver rebuilds the matrix when the pattern grows. A pair that still falls outside the pattern
 //! inside a step costs PETSc a reallocation, not an error.
@@ -271,7 +271,8 @@ pub const TOUCH_TOLERANCE: f64 = 1e-10;
 /// Search margin of the evaluations, in secondary-face box diagonals.
 pub const EVAL_MARGIN: f64 = 0.5;
 
-/// Search margin of the matrix pattern made at the start of a step, in face box diagonals.
+/// Search margin of the matrix pattern made at a step's start and at its predicted end, in
+/// secondary-face box diagonals.
 pub const PATTERN_MARGIN: f64 = 1.0;
 
 /// The deepest penetration, in `h_A`, a Newton update may take a traction node to
