@@ -739,7 +739,7 @@ impl Run<'_> {
 }
 
 /// A progress line's note on the tangent entries a step added outside the matrix pattern
-/// (empty when none): each costs PETSc a reallocation of the rows it lands in.
+/// (empty when none), for which PETSc reallocated rows.
 fn outside_pattern_note(entries: u64) -> String {
     match entries {
         0 => String::new(),
