@@ -24,13 +24,14 @@ use crate::error::{Error, Result};
 use crate::io::output::{write_atomic, Summary};
 
 /// The phases of the table: a column title and the `summary.json` timings it sums.
-const PHASES: [(&str, &[&str]); 7] = [
+const PHASES: [(&str, &[&str]); 8] = [
     ("setup", &["setup"]),
     ("search", &["contact_search"]),
     ("integration", &["contact_integration"]),
     ("contact asm", &["contact_assembly"]),
     ("bulk asm", &["bulk_assembly"]),
     ("linear solve", &["solve"]),
+    ("pattern", &["pattern"]),
     ("output", &["output"]),
 ];
 
@@ -318,7 +319,7 @@ mod tests {
             converged: true,
             newton,
             linear: 10.0 * newton,
-            seconds: vec![seconds / 7.0; 7],
+            seconds: vec![seconds / PHASES.len() as f64; PHASES.len()],
             peak_mb: Some(dofs / 100.0),
             contact_balance: (ranks > 1).then_some(1.05),
         }

@@ -12,6 +12,7 @@
 //! | contact assembly | `Contact assembly` |
 //! | bulk assembly | `assembly` (the bulk elements, tied interfaces, PETSc's assembly) |
 //! | linear solve | `solve` (SNES: the linear solves, norms and updates) |
+//! | matrix pattern | `pattern` (the contact pattern's updates and the new matrices they make; none without contact) |
 //! | output | `output` |
 //! | start and setup | `Main Stage` (everything outside the other stages: PETSc's start, the
 //! partitioning, the dof numbering, the load-step predictor's bulk work, linear solves and
@@ -42,12 +43,13 @@ use crate::io::petsc_log::PetscLog;
 use crate::io::plot;
 
 /// The phases reported, each with the log stages it sums.
-pub const PHASES: [(&str, &[&str]); 7] = [
+pub const PHASES: [(&str, &[&str]); 8] = [
     ("contact search", &["Contact search"]),
     ("mortar integration", &["Mortar integration"]),
     ("contact assembly", &["Contact assembly"]),
     ("bulk assembly", &["assembly"]),
     ("linear solve", &["solve"]),
+    ("matrix pattern", &["pattern"]),
     ("output", &["output"]),
     ("start and setup", &["Main Stage", "setup"]),
 ];

@@ -117,6 +117,7 @@ pub fn nodal_forces(model: &Model, at: &State) -> Result<Vec<f64>> {
 }
 
 /// The matrix pattern of the rows this rank owns, node by node (module docs).
+#[derive(Clone, PartialEq)]
 pub struct Pattern {
     /// Per node: the nodes (with a free dof) coupled to it, sorted; empty for nodes whose rows
     /// this rank does not own.

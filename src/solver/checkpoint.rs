@@ -266,7 +266,7 @@ impl Run<'_> {
         }
         l.jac = new_matrix(&l.pattern, &self.cx.dofs, &l.rigid_modes)?;
         if moves {
-            // As after the pattern grew (`step`): a moving stencil may reach past it.
+            // As after a pattern update (`pattern_update`): a moving stencil may reach past it.
             l.jac.allow_new_nonzeros()?;
         }
         // A linear scene's tangent is assembled and factorized once, and then kept: again for

@@ -44,6 +44,7 @@
 //! - `state`: the mutable state of a run (load, step size, cuts, counters).
 //! - `step`: one load step: predictor, attempts, Uzawa, cutting, the step's outputs.
 //! - `predictor`, `cut`: the load-step predictor and the cutting rules.
+//! - `pattern_update`: the matrix pattern through the steps, and new matrices.
 //! - `evaluation`, `assembly`: the model evaluated at a Newton iterate and put into PETSc.
 //! - `summary`: the run's metrics, progress notes and last line.
 //! - `results`: the files a run writes.
@@ -56,6 +57,7 @@ mod collective;
 mod cut;
 mod evaluation;
 mod linear;
+mod pattern_update;
 mod predictor;
 mod results;
 mod setup;
@@ -115,7 +117,13 @@ const FALLBACK_LINE_SEARCH: &str = "bt";
 
 /// The phases of a run, each a PETSc log stage (`-log_view`) and a total in `summary.json`'s
 /// `timings`.
-const PHASES: [&str; 4] = ["setup", "assembly", "solve", "output"];
+const PHASES: [&str; 5] = [
+    "setup",
+    "assembly",
+    "solve",
+    pattern_update::PATTERN_PHASE,
+    "output",
+];
 
 /// The parts of `assembly` timed apart in `timings`: the contributions' own timed phases (the
 /// contact search, the mortar integration, the contact assembly) and `bulk_assembly`, the rest
@@ -189,7 +197,11 @@ pub const CONTACT_MONITOR: &str = "-contact_monitor";
 
 /// The PETSc objects of a run and the matrix pattern.
 struct Linear {
+    /// The matrix's pattern (`pattern_update`).
     pattern: Pattern,
+    /// The couplings of the contributions that do not move, made at set-up: what each renewal
+    /// of `pattern` starts from.
+    fixed_pattern: Pattern,
     /// The near null space of every matrix made.
     rigid_modes: Vec<Vec<f64>>,
     jac: Matrix,

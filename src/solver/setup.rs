@@ -146,6 +146,7 @@ impl Linear {
         Ok(Linear {
             force_scale,
             choice,
+            fixed_pattern: pattern.clone(),
             pattern,
             rigid_modes,
             jac,

@@ -18,7 +18,6 @@ use super::cut::{cut_limit, describe, what_to_change};
 use super::evaluation::{Evaluation, Verdict};
 use super::predictor::{predict, NewtonTangent};
 use super::results::StepRow;
-use super::setup::new_matrix;
 use super::summary::{not_started, retries_note, Load};
 use super::{Run, FULL_STEP_CYCLE_PROGRESS, FULL_STEP_ITERATIONS, STICK_PREDICTOR_ITERATIONS};
 
@@ -88,7 +87,7 @@ impl Run<'_> {
         }
         self.linear.x.copy_to(&mut self.linear.x_prev)?;
         let lead_at_start = self.state.lead_with_fallback;
-        self.update_pattern(t)?;
+        self.grow_pattern(t)?;
         self.model.save();
         {
             let mut ev = self.cx.evaluator.borrow_mut();
@@ -97,14 +96,12 @@ impl Run<'_> {
         // The contributions' timed work of this step's evaluations, the predictor's included.
         let timed_before = self.model.phase_seconds();
         let started = Instant::now();
-        // Seconds inside the step's timing that belong to no solve: the pattern's update at the
-        // predicted end of the step (untimed, as at the step's start).
+        // Seconds inside the step's timing that belong to no solve: the pattern's renewal at
+        // the predicted end of the step (its own phase, as the step start's update is).
         let mut untimed = 0.0;
         if self.cx.scene.predictor {
             self.predict(t, t_new)?;
-            let update = Instant::now();
-            self.update_pattern(t_new)?;
-            untimed = update.elapsed().as_secs_f64();
+            untimed = self.renew_pattern(t, t_new)?;
         }
         self.cx.evaluator.borrow_mut().t = t_new;
         self.linear.snes.rebuild_multigrid();
@@ -141,37 +138,6 @@ impl Run<'_> {
             .world
             .all_reduce_into(&mine, &mut all, SystemOperation::sum());
         all
-    }
-
-    /// The contributions whose pattern moves with the displacements add the couplings of the
-    /// state at load `t` (at a step's start, and at the predicted end of the step, so that
-    /// the pattern holds the pairs of a step that slides farther than its margin); a new
-    /// matrix when the pattern grew on some rank (*collective*).
-    fn update_pattern(&mut self, t: f64) -> Result<()> {
-        let moving: Vec<_> = self
-            .model
-            .parts()
-            .iter()
-            .filter(|c| c.pattern_moves())
-            .collect();
-        if moving.is_empty() {
-            return Ok(());
-        }
-        let mut ev = self.cx.evaluator.borrow_mut();
-        ev.t = t;
-        ev.load(self.cx.scene, &self.cx.dofs, &self.linear.x)?;
-        let at = ev.state(self.cx.scene);
-        let grew = self
-            .linear
-            .pattern
-            .add(&self.cx.dofs, &at, moving.iter().map(|c| c.as_ref()));
-        if any_rank(&self.cx.world, grew) {
-            let linear = &mut self.linear;
-            linear.jac = new_matrix(&linear.pattern, &self.cx.dofs, &linear.rigid_modes)?;
-            linear.jac.allow_new_nonzeros()?;
-            linear.tangent.newton = NewtonTangent::Other;
-        }
-        Ok(())
     }
 
     /// The load-step predictor from `t` to `t_new` (`steps.predictor`).
@@ -641,6 +607,7 @@ impl Run<'_> {
         output_started: Instant,
     ) -> Result<()> {
         let (step, t) = (self.state.step, self.state.t);
+        let matrix_entries = self.matrix_entries()?;
         let mut ev = self.cx.evaluator.borrow_mut();
         ev.load(self.cx.scene, &self.cx.dofs, &self.linear.x)?;
         let at = ev.state(self.cx.scene);
@@ -670,6 +637,7 @@ impl Run<'_> {
             u: at.u,
             tracked: &tracked,
             contributions: &self.model.history(),
+            matrix_entries,
             seconds: [
                 seconds.assembly,
                 (seconds.total - seconds.assembly).max(0.0),

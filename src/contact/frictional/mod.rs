@@ -185,10 +185,12 @@
 //!
 //! The pattern of a node's block is every node of the faces carrying it and of the primary faces
 //! their search finds. At the start of each step and at its predicted end (the load-step
-//! predictor's iterate, with `steps.predictor`), the contact contribution hands the solver the blocks of the pairs found with a search margin of
-//! [`PATTERN_MARGIN`] face sizes, twice the margin the evaluations use ([`EVAL_MARGIN`]); the
-//! solver rebuilds the matrix when the pattern grows. A pair that still falls outside the pattern
-//! inside a step costs PETSc a reallocation, not an error.
+//! predictor's iterate, with `steps.predictor`), the contact contribution hands the solver the
+//! blocks of the pairs found with a search margin of [`PATTERN_MARGIN`] face sizes, twice the
+//! margin the evaluations use ([`EVAL_MARGIN`]); the solver keeps the pattern to those two
+//! states' pairs and the couplings that do not move, and makes a new matrix when it changes
+//! (`solver::pattern_update`). A pair that still falls outside the pattern inside a step costs
+//! PETSc a reallocation, not an error.
 //!
 //! # Modules
 //!

@@ -9,8 +9,10 @@ use super::pass::{ContactPass, FaceData};
 use super::{ContactInterfaces, PATTERN_MARGIN};
 
 impl ContactInterfaces {
-    /// Hands `couple` the nodes each traction node couples (its stencil, unsorted): the
-    /// pairs found at `at` with the margin [`PATTERN_MARGIN`] (module docs, "Matrix pattern").
+    /// Hands `couple` the nodes each traction node couples (its stencil, sorted, each node
+    /// once): the pairs found at `at` with the margin [`PATTERN_MARGIN`] (module docs, "Matrix
+    /// pattern"). Each node of a stencil couples to every other, so the work is the square of
+    /// its length: the nodes that several faces share are handed once.
     pub(crate) fn stencils(&self, at: &State, couple: &mut dyn FnMut(&[usize])) {
         let x = at.positions();
         for pass in self.interfaces.iter().flat_map(|i| i.passes.iter()) {
@@ -18,8 +20,10 @@ impl ContactInterfaces {
                 ContactMethod::Mortar => pass.mortar_stencils(&x),
                 ContactMethod::NodeOnSegment => pass.nts_stencils(&x),
             };
-            for nodes in &stencils {
-                couple(nodes);
+            for mut nodes in stencils {
+                nodes.sort_unstable();
+                nodes.dedup();
+                couple(&nodes);
             }
         }
     }

@@ -69,6 +69,9 @@ pub struct StepRow<'a> {
     pub tracked: &'a [[f64; 3]],
     /// The contributions' history values, in the order of their columns.
     pub contributions: &'a [f64],
+    /// The entries the matrix stores, over the ranks, at the step's end: its pattern and any
+    /// entry a Newton iterate added outside it.
+    pub matrix_entries: u64,
     pub seconds: [f64; 3],
 }
 
@@ -155,6 +158,7 @@ impl Results {
                 }
             }
             cols.extend(contributions);
+            cols.push("matrix_entries".to_string());
             cols.extend(["seconds_assembly", "seconds_solve", "seconds_output"].map(String::from));
             History::new(dir.join("history.csv"), cols)
         });
@@ -370,6 +374,7 @@ impl Results {
         row.extend(set_u.iter().flatten());
         row.extend(r.tracked.iter().flatten());
         row.extend(r.contributions);
+        row.push(r.matrix_entries as f64);
         row.extend(r.seconds);
         let written = h.push_row(row);
         self.keep(written);

@@ -1,0 +1,134 @@
+//! The matrix pattern through a run: what it holds at each step, and when the matrix is made
+//! anew.
+//!
+//! The pattern is the couplings of the contributions that do not move (the bulk elements, tied
+//! interfaces), made once at set-up ([`super::Linear::fixed_pattern`]), and those of the
+//! contributions whose couplings move with the displacements (contact: the pairs its search
+//! finds with a margin). Two updates keep the moving part current:
+//!
+//! - at a step's start the pattern **grows** to hold the couplings of the converged state, so
+//!   that the predictor's residual and tangent fit it; it only grows there, so that the matrix
+//!   (and with it the last Newton factorization the predictor may reuse) is kept whenever it
+//!   already holds them;
+//! - at the predicted end of a step (after the load-step predictor, `steps.predictor`) it is
+//!   **renewed**: the fixed couplings, those of the step's start and those of the predicted
+//!   iterate, and nothing else. A step that slides farther than the search margin then still
+//!   finds its pairs inside the pattern, and the couplings a contact zone left behind (or a
+//!   prediction that overshot) are dropped instead of being carried, as stored zeros, to the
+//!   run's end.
+//!
+//! Without the predictor only the step-start update runs, and the pattern only grows.
+//! Whenever the pattern changes on some rank every rank makes a new matrix with it
+//! (collectively). Both updates are timed in the `pattern` phase (a PETSc log stage too), which
+//! a scene without moving couplings never enters.
+
+use std::time::Instant;
+
+use mpi::collective::{CommunicatorCollectives, SystemOperation};
+
+use crate::error::Result;
+use crate::model::Contribution;
+
+use super::collective::any_rank;
+use super::predictor::NewtonTangent;
+use super::setup::new_matrix;
+use super::Run;
+
+/// The phase (`summary.json`'s `timings`, and a PETSc log stage) of the pattern updates and
+/// the new matrices they make.
+pub(super) const PATTERN_PHASE: &str = "pattern";
+
+impl Run<'_> {
+    /// Grows the pattern to hold the moving couplings of the current iterate at load `t` (a
+    /// step's start; module docs); a new matrix when it grew on some rank (*collective*).
+    pub(super) fn grow_pattern(&mut self, t: f64) -> Result<()> {
+        if !self.has_moving_pattern() {
+            return Ok(());
+        }
+        let started = Instant::now();
+        let _stage = self.phases.push(PATTERN_PHASE)?;
+        let grew = {
+            let moving = moving_parts(&self.model);
+            let mut ev = self.cx.evaluator.borrow_mut();
+            ev.t = t;
+            ev.load(self.cx.scene, &self.cx.dofs, &self.linear.x)?;
+            let at = ev.state(self.cx.scene);
+            self.linear
+                .pattern
+                .add(&self.cx.dofs, &at, moving.into_iter())
+        };
+        if any_rank(&self.cx.world, grew) {
+            self.new_matrix()?;
+        }
+        self.phases
+            .add(PATTERN_PHASE, started.elapsed().as_secs_f64());
+        Ok(())
+    }
+
+    /// Makes the pattern anew at the predicted end of the step from `t` to `t_new`: the fixed
+    /// couplings, the moving ones of the step's start (the last converged state) and of the
+    /// predicted iterate (module docs); a new matrix when it changed on some rank. Returns its
+    /// seconds (*collective*).
+    pub(super) fn renew_pattern(&mut self, t: f64, t_new: f64) -> Result<f64> {
+        if !self.has_moving_pattern() {
+            return Ok(0.0);
+        }
+        let started = Instant::now();
+        let _stage = self.phases.push(PATTERN_PHASE)?;
+        let mut renewed = self.linear.fixed_pattern.clone();
+        {
+            let moving = moving_parts(&self.model);
+            let mut ev = self.cx.evaluator.borrow_mut();
+            for (load, x) in [(t, &self.linear.x_prev), (t_new, &self.linear.x)] {
+                ev.t = load;
+                ev.load(self.cx.scene, &self.cx.dofs, x)?;
+                let at = ev.state(self.cx.scene);
+                renewed.add(&self.cx.dofs, &at, moving.iter().copied());
+            }
+        }
+        let changed = renewed != self.linear.pattern;
+        if any_rank(&self.cx.world, changed) {
+            self.linear.pattern = renewed;
+            self.new_matrix()?;
+        }
+        let seconds = started.elapsed().as_secs_f64();
+        self.phases.add(PATTERN_PHASE, seconds);
+        Ok(seconds)
+    }
+
+    /// The entries the matrix stores, over the ranks (*collective*).
+    pub(super) fn matrix_entries(&self) -> Result<u64> {
+        let mine = self.linear.jac.stored_entries()?;
+        let mut all = 0;
+        self.cx
+            .world
+            .all_reduce_into(&mine, &mut all, SystemOperation::sum());
+        Ok(all)
+    }
+
+    /// Whether some contribution's couplings move with the displacements.
+    fn has_moving_pattern(&self) -> bool {
+        self.model.parts().iter().any(|c| c.pattern_moves())
+    }
+
+    /// A new matrix with the current pattern. Its tangent is not the last Newton one, and a
+    /// moving coupling may still reach past the pattern inside a step: PETSc then makes room
+    /// for it (counted, `Matrix::stored_entries`) instead of failing (*collective*).
+    fn new_matrix(&mut self) -> Result<()> {
+        let linear = &mut self.linear;
+        linear.jac = new_matrix(&linear.pattern, &self.cx.dofs, &linear.rigid_modes)?;
+        linear.jac.allow_new_nonzeros()?;
+        linear.tangent.newton = NewtonTangent::Other;
+        Ok(())
+    }
+}
+
+/// The contributions whose couplings move with the displacements.
+fn moving_parts(model: &crate::model::Model) -> Vec<&dyn Contribution> {
+    model
+        .parts()
+        .iter()
+        .filter(|c| c.pattern_moves())
+        .map(|c| c.as_ref())
+        .collect()
+}
