@@ -5,13 +5,14 @@
 //! per rank, `step_<k>_r<rank>.ckpt` ([`crate::io::checkpoint`]), holding what the next step
 //! needs:
 //!
-//! - what identifies the run: the program version, the digests of the case file as read, of
-//!   the mesh and of the PETSc options file, and the rank count;
+//! - what identifies the run: the program version and the layout of its checkpoints
+//!   ([`FORMAT`]), the digests of the case file as read, of the mesh and of the PETSc options
+//!   file, and the rank count;
 //! - the load path: the load and step size after cuts, the step count, the run's counters and
 //!   whether the next step starts with the fallback line search;
 //!   the summary's step records;
 //! - this rank's part of the solution and its rows of the matrix pattern (a contact pattern
-//!   grows with the contact zone: the restarted matrix has the same nonzeros, so the linear
+//!   follows the contact zone: the restarted matrix has the same nonzeros, so the linear
 //!   solver does the same arithmetic);
 //! - every contribution's carried state ([`crate::model::Contribution::write_state`]: the
 //!   contact multipliers, tractions and slip history, the tied multipliers);
@@ -52,8 +53,7 @@ use crate::petsc::LinearPath;
 
 use super::assembly::Pattern;
 use super::collective::agree_on;
-use super::predictor::{NewtonTangent, Tangent};
-use super::setup::{new_matrix, new_snes};
+use super::setup::new_snes;
 use super::Run;
 
 /// The checkpoint folder in the output folder.
@@ -66,6 +66,11 @@ const LATEST: &str = "latest";
 fn file_name(step: usize, rank: usize) -> String {
     format!("step_{step:04}_r{rank}.ckpt")
 }
+
+/// The layout of the checkpoints, raised whenever what they hold or mean changes (2: the
+/// history's `matrix_entries` column, and a pattern renewed at each step's predicted end), so
+/// that a checkpoint of another layout is refused by name rather than misread.
+const FORMAT: u32 = 2;
 
 /// What ties a checkpoint to the run that may continue it.
 pub(super) struct Identity {
@@ -82,7 +87,7 @@ impl Identity {
             None => 0,
         };
         Identity {
-            version: env!("CARGO_PKG_VERSION").to_string(),
+            version: format!("{} (checkpoint format {FORMAT})", env!("CARGO_PKG_VERSION")),
             digests: [scene.case_digest, Fnv64::of_debug(&scene.mesh), options],
             ranks,
         }
@@ -254,7 +259,6 @@ impl Run<'_> {
     /// before (a factorization the predictor would reuse, a multigrid hierarchy PETSc would
     /// keep) carries over (module docs) (*collective*).
     fn as_a_restart_would_go_on(&mut self) -> Result<()> {
-        let moves = self.model.parts().iter().any(|c| c.pattern_moves());
         let l = &mut self.linear;
         if l.choice.path != LinearPath::Direct {
             // A preconditioner may keep what it built (the interface split its fields'
@@ -264,19 +268,12 @@ impl Run<'_> {
             let solver = (l.force_scale, l.choice.path);
             l.snes = new_snes(&self.cx, &self.model, solver, &l.rigid_modes)?;
         }
-        l.jac = new_matrix(&l.pattern, &self.cx.dofs, &l.rigid_modes)?;
-        if moves {
-            // As after a pattern update (`pattern_update`): a moving stencil may reach past it.
-            l.jac.allow_new_nonzeros()?;
-        }
+        self.remake_matrix()?;
         // A linear scene's tangent is assembled and factorized once, and then kept: again for
         // the new matrix.
-        l.tangent = Tangent {
-            ready: false,
-            newton: NewtonTangent::Other,
-        };
+        self.linear.tangent.ready = false;
         if self.cx.scene.is_linear() {
-            l.snes.freeze_jacobian()?;
+            self.linear.snes.freeze_jacobian()?;
         }
         Ok(())
     }

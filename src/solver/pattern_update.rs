@@ -10,8 +10,8 @@
 //!   that the predictor's residual and tangent fit it; it only grows there, so that the matrix
 //!   (and with it the last Newton factorization the predictor may reuse) is kept whenever it
 //!   already holds them;
-//! - at the predicted end of a step (after the load-step predictor, `steps.predictor`) it is
-//!   **renewed**: the fixed couplings, those of the step's start and those of the predicted
+//! - at the predicted end of a step (once the load-step predictor, `steps.predictor`, moved the
+//!   iterate; a failed prediction keeps the pattern) it is **renewed**: the fixed couplings, those of the step's start and those of the predicted
 //!   iterate, and nothing else. A step that slides farther than the search margin then still
 //!   finds its pairs inside the pattern, and the couplings a contact zone left behind (or a
 //!   prediction that overshot) are dropped instead of being carried, as stored zeros, to the
@@ -42,7 +42,7 @@ impl Run<'_> {
     /// Grows the pattern to hold the moving couplings of the current iterate at load `t` (a
     /// step's start; module docs); a new matrix when it grew on some rank (*collective*).
     pub(super) fn grow_pattern(&mut self, t: f64) -> Result<()> {
-        if !self.has_moving_pattern() {
+        if !self.model.pattern_moves() {
             return Ok(());
         }
         let started = Instant::now();
@@ -58,7 +58,7 @@ impl Run<'_> {
                 .add(&self.cx.dofs, &at, moving.into_iter())
         };
         if any_rank(&self.cx.world, grew) {
-            self.new_matrix()?;
+            self.remake_matrix()?;
         }
         self.phases
             .add(PATTERN_PHASE, started.elapsed().as_secs_f64());
@@ -70,7 +70,7 @@ impl Run<'_> {
     /// predicted iterate (module docs); a new matrix when it changed on some rank. Returns its
     /// seconds (*collective*).
     pub(super) fn renew_pattern(&mut self, t: f64, t_new: f64) -> Result<f64> {
-        if !self.has_moving_pattern() {
+        if !self.model.pattern_moves() {
             return Ok(0.0);
         }
         let started = Instant::now();
@@ -89,7 +89,7 @@ impl Run<'_> {
         let changed = renewed != self.linear.pattern;
         if any_rank(&self.cx.world, changed) {
             self.linear.pattern = renewed;
-            self.new_matrix()?;
+            self.remake_matrix()?;
         }
         let seconds = started.elapsed().as_secs_f64();
         self.phases.add(PATTERN_PHASE, seconds);
@@ -106,18 +106,12 @@ impl Run<'_> {
         Ok(all)
     }
 
-    /// Whether some contribution's couplings move with the displacements.
-    fn has_moving_pattern(&self) -> bool {
-        self.model.parts().iter().any(|c| c.pattern_moves())
-    }
-
-    /// A new matrix with the current pattern. Its tangent is not the last Newton one, and a
-    /// moving coupling may still reach past the pattern inside a step: PETSc then makes room
-    /// for it (counted, `Matrix::stored_entries`) instead of failing (*collective*).
-    fn new_matrix(&mut self) -> Result<()> {
+    /// A new matrix with the current pattern, whose tangent is not the last Newton one
+    /// (*collective*).
+    pub(super) fn remake_matrix(&mut self) -> Result<()> {
         let linear = &mut self.linear;
-        linear.jac = new_matrix(&linear.pattern, &self.cx.dofs, &linear.rigid_modes)?;
-        linear.jac.allow_new_nonzeros()?;
+        let moves = self.model.pattern_moves();
+        linear.jac = new_matrix(&linear.pattern, &self.cx.dofs, &linear.rigid_modes, moves)?;
         linear.tangent.newton = NewtonTangent::Other;
         Ok(())
     }

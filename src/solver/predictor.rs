@@ -43,20 +43,20 @@ pub(super) struct Tangent {
 
 /// Moves `x` from x_n at `t0` to the predicted first iterate of the step to `t1`; leaves it
 /// unchanged when the tangent or the residual at x_n is not available (an inverted element:
-/// Newton will report it). `reuse_newton_tangent` marks the last Newton factorization as the
-/// one to solve with (module docs).
+/// Newton will report it) or the linear solve fails. `reuse_newton_tangent` marks the last
+/// Newton factorization as the one to solve with (module docs). Returns whether `x` moved.
 pub(super) fn predict(
     ev: &Evaluation,
     (x, jac, snes): (&mut Vector, &mut Matrix, &mut Snes),
     (t0, t1): (f64, f64),
     tangent: &mut Tangent,
     reuse_newton_tangent: bool,
-) -> Result<()> {
+) -> Result<bool> {
     const EPS: f64 = 1e-6;
     let f0 = ev.residual_at(x, t0)?;
     let f1 = ev.residual_at(x, t0 + EPS * (t1 - t0))?;
     let (Some(f0), Some(mut rhs)) = (f0, f1) else {
-        return Ok(());
+        return Ok(false);
     };
     // rhs = f0 + (f1 - f0) / eps
     rhs.axpy(-1.0, &f0)?;
@@ -65,7 +65,7 @@ pub(super) fn predict(
     if !tangent.ready && !reuse_newton_tangent {
         ev.cx.evaluator.borrow_mut().t = t0;
         if ev.jacobian(x, jac)?.is_err() {
-            return Ok(());
+            return Ok(false);
         }
         tangent.ready = ev.cx.scene.is_linear();
     }
@@ -79,5 +79,5 @@ pub(super) fn predict(
     if solved {
         x.axpy(-1.0, &dx)?;
     }
-    Ok(())
+    Ok(solved)
 }

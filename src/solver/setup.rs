@@ -136,7 +136,7 @@ impl Linear {
         pattern.add(dofs, &reference, fixed.map(|c| c.as_ref()));
         // Near null space for algebraic multigrid (ignored by the default direct solve).
         let rigid_modes = dofs.rigid_body_modes(&scene.mesh);
-        let jac = new_matrix(&pattern, dofs, &rigid_modes)?;
+        let jac = new_matrix(&pattern, dofs, &rigid_modes, model.pattern_moves())?;
         x.set_all(0.0)?;
         let ev = Evaluation { cx, model };
         let force_scale = residual_scale(&ev, &x)?;
@@ -203,14 +203,21 @@ pub(super) fn new_snes(
 }
 
 /// A matrix of the pattern's sparsity, with the rigid body modes of every body as its near null
-/// space.
+/// space; where the model's couplings move (`couplings_move`: contact), one that makes room for
+/// entries outside the pattern.
 pub(super) fn new_matrix(
     pattern: &Pattern,
     dofs: &DofMap,
     rigid_modes: &[Vec<f64>],
+    couplings_move: bool,
 ) -> Result<Matrix> {
     let mut jac = Matrix::new_aij(&pattern.sparsity(dofs))?;
     jac.set_near_null_space(rigid_modes)?;
+    if couplings_move {
+        // A moving stencil may reach past the pattern inside a step: PETSc then makes room for
+        // it (counted, `Matrix::stored_entries`) instead of failing.
+        jac.allow_new_nonzeros()?;
+    }
     Ok(jac)
 }
 

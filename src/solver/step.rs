@@ -96,12 +96,12 @@ impl Run<'_> {
         // The contributions' timed work of this step's evaluations, the predictor's included.
         let timed_before = self.model.phase_seconds();
         let started = Instant::now();
-        // Seconds inside the step's timing that belong to no solve: the pattern's renewal at
-        // the predicted end of the step (its own phase, as the step start's update is).
-        let mut untimed = 0.0;
-        if self.cx.scene.predictor {
-            self.predict(t, t_new)?;
-            untimed = self.renew_pattern(t, t_new)?;
+        // The seconds of the pattern's renewal at the predicted end of the step: in its own
+        // phase (as the step start's update is), not the solve's. A prediction that left the
+        // state where it was (its solve failed) keeps the pattern as it is.
+        let mut pattern_seconds = 0.0;
+        if self.cx.scene.predictor && self.predict(t, t_new)? {
+            pattern_seconds = self.renew_pattern(t, t_new)?;
         }
         self.cx.evaluator.borrow_mut().t = t_new;
         self.linear.snes.rebuild_multigrid();
@@ -110,7 +110,7 @@ impl Run<'_> {
         self.linear.snes.force_iteration(false)?;
         drop(solve_stage);
         self.state.counts.newton += solved.counted.newton;
-        let seconds = self.account_time(started, untimed, &timed_before);
+        let seconds = self.account_time(started, pattern_seconds, &timed_before);
         solved.counted.outside_pattern = self.step_outside_pattern();
         self.check_null_pivots(t_new)?;
         if solved.outcome.converged {
@@ -140,8 +140,9 @@ impl Run<'_> {
         all
     }
 
-    /// The load-step predictor from `t` to `t_new` (`steps.predictor`).
-    fn predict(&mut self, t: f64, t_new: f64) -> Result<()> {
+    /// The load-step predictor from `t` to `t_new` (`steps.predictor`); true when it moved the
+    /// iterate.
+    fn predict(&mut self, t: f64, t_new: f64) -> Result<bool> {
         let reuse = self.cx.scene.predictor_reuses_newton_tangent
             && self.linear.tangent.newton == NewtonTangent::OfLastConvergedStep;
         let ev = Evaluation {
@@ -457,16 +458,16 @@ impl Run<'_> {
     }
 
     /// Adds the step's evaluation and solve times to the phases; the contributions' timed
-    /// parts of assembly apart (`timed_before`: their totals at the step's start); `untimed`
-    /// seconds since `started` belong to neither.
+    /// parts of assembly apart (`timed_before`: their totals at the step's start);
+    /// `pattern_seconds` since `started` belong to neither (the `pattern` phase has them).
     fn account_time(
         &mut self,
         started: Instant,
-        untimed: f64,
+        pattern_seconds: f64,
         timed_before: &std::collections::BTreeMap<&'static str, f64>,
     ) -> StepSeconds {
         let assembly = self.cx.evaluator.borrow().assembly_seconds;
-        let total = started.elapsed().as_secs_f64() - untimed;
+        let total = started.elapsed().as_secs_f64() - pattern_seconds;
         self.phases.add("assembly", assembly);
         self.phases.add("solve", (total - assembly).max(0.0));
         let mut timed = 0.0;

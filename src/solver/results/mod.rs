@@ -49,8 +49,8 @@ use interface::write_interface_piece;
 /// converged, linear_its, residual`, the reaction components and mean prescribed displacements
 /// of every reaction set, the mean displacement of every tracked set, the contributions'
 /// history columns (the contact force sums of every contact interface, `contact_<name>_normal`,
-/// `_tangential`, `_fx`, `_fy`, `_fz`, `_stick`, `_slip`, `_dissipation`, `_max_slip`), and the
-/// seconds of assembly, solve and output. Newton iterations are summed over the step's Uzawa
+/// `_tangential`, `_fx`, `_fy`, `_fz`, `_stick`, `_slip`, `_dissipation`, `_max_slip`), the
+/// matrix's stored entries, and the seconds of assembly, solve and output. Newton iterations are summed over the step's Uzawa
 /// solves.
 pub struct StepRow<'a> {
     pub step: usize,
