@@ -22,6 +22,13 @@ pub(crate) fn any_rank(world: &SimpleCommunicator, flag: bool) -> bool {
     lowest_rank_with(world, flag) < world.size()
 }
 
+/// *Collective*: the sum of a count over the ranks.
+pub(crate) fn sum_over_ranks(world: &SimpleCommunicator, mine: u64) -> u64 {
+    let mut all = 0;
+    world.all_reduce_into(&mine, &mut all, SystemOperation::sum());
+    all
+}
+
 /// *Collective*: the `text` of the lowest rank that has one, on every rank (`None` when no
 /// rank has one).
 pub(crate) fn first_rank_text(world: &SimpleCommunicator, text: Option<&str>) -> Option<String> {

@@ -24,12 +24,10 @@
 
 use std::time::Instant;
 
-use mpi::collective::{CommunicatorCollectives, SystemOperation};
-
 use crate::error::Result;
 use crate::model::Contribution;
 
-use super::collective::any_rank;
+use super::collective::{any_rank, sum_over_ranks};
 use super::predictor::NewtonTangent;
 use super::setup::new_matrix;
 use super::Run;
@@ -99,11 +97,7 @@ impl Run<'_> {
     /// The entries the matrix stores, over the ranks (*collective*).
     pub(super) fn matrix_entries(&self) -> Result<u64> {
         let mine = self.linear.jac.stored_entries()?;
-        let mut all = 0;
-        self.cx
-            .world
-            .all_reduce_into(&mine, &mut all, SystemOperation::sum());
-        Ok(all)
+        Ok(sum_over_ranks(&self.cx.world, mine))
     }
 
     /// A new matrix with the current pattern, whose tangent is not the last Newton one

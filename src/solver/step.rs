@@ -13,7 +13,7 @@ use crate::model::Augmented;
 use crate::petsc::{CallbackError, SnesOutcome, StepLimitFn, Vector};
 
 use super::assembly;
-use super::collective::any_rank;
+use super::collective::{any_rank, sum_over_ranks};
 use super::cut::{cut_limit, describe, what_to_change};
 use super::evaluation::{Evaluation, Verdict};
 use super::predictor::{predict, NewtonTangent};
@@ -133,11 +133,7 @@ impl Run<'_> {
     /// (*collective*).
     fn step_outside_pattern(&self) -> u64 {
         let mine = self.cx.evaluator.borrow().outside_pattern;
-        let mut all = 0;
-        self.cx
-            .world
-            .all_reduce_into(&mine, &mut all, SystemOperation::sum());
-        all
+        sum_over_ranks(&self.cx.world, mine)
     }
 
     /// The load-step predictor from `t` to `t_new` (`steps.predictor`); true when it moved the
