@@ -1,11 +1,13 @@
-//! The contact's matrix pattern against a slide of more than its margin per step, in release
-//! mode: `cargo test --release --test matrix_pattern`.
+//! The contact's matrix pattern against a slide of more than the search margin per step, in
+//! release mode: `cargo test --release --test matrix_pattern`.
 //!
-//! The pattern holds the pairs found at a step's start within a margin of one secondary-face
-//! box diagonal, and at the predicted end of the step (with `steps.predictor`, the default). A
-//! step that slides farther than that margin would pair faces outside it, and PETSc would
+//! The pattern holds the pairs an evaluation finds at a step's start and at the predicted end
+//! of the step (with `steps.predictor`, the default), and grows at a Newton iterate whose pairs
+//! it does not hold. A step that slides farther than the search margin would otherwise pair
+//! faces outside it, as would the iterates that stray from the two states, and PETSc would
 //! reallocate the matrix's rows for those entries at every Newton iteration that finds new
-//! ones: the progress line of such a step counts the entries.
+//! ones. The progress line of a step counts both: the iterates at which the pattern grew, and
+//! the entries outside it.
 
 mod common;
 
@@ -44,17 +46,16 @@ fn lines_outside_the_pattern(stdout: &str) -> Vec<&str> {
         .collect()
 }
 
-/// With the predictor (the default) the pattern holds every pair of each step: no step adds an
-/// entry outside it (without the pattern at the predicted end of each step, steps 4-6 add 428-496
-/// each),
-/// and it follows the contact. Without the predictor the same slide does add entries, and says
-/// so: the slide reaches past the margin of the start's pattern, which only grows.
+/// With the predictor (the default) no step adds an entry outside the pattern, and it follows
+/// the contact. Without the predictor the slide reaches past the start's pattern: the pattern
+/// grows at Newton iterates instead, and no entry falls outside it either, on one rank or two
+/// (where every rank must agree to grow it).
 #[test]
 #[cfg_attr(
     debug_assertions,
     ignore = "release only: cargo test --release --test matrix_pattern"
 )]
-fn a_slide_past_the_pattern_margin_stays_inside_the_predicted_pattern() {
+fn a_slide_past_the_search_margin_stays_inside_the_pattern() {
     let predicted = long_steps_slide();
     let case = common::write_case("pattern_predicted", &predicted);
     let (out_dir, stdout) = common::run_case(&case, 1, &[]);
@@ -77,9 +78,16 @@ fn a_slide_past_the_pattern_margin_stays_inside_the_predicted_pattern() {
 
     let unpredicted = common::with_step_option(&predicted, "predictor = false");
     let case = common::write_case("pattern_unpredicted", &unpredicted);
-    let (_, stdout) = common::run_case(&case, 1, &[]);
-    assert!(
-        !lines_outside_the_pattern(&stdout).is_empty(),
-        "without the predictor:\n{stdout}"
-    );
+    for ranks in [1, 2] {
+        let (_, stdout) = common::run_case(&case, ranks, &[]);
+        assert_eq!(
+            lines_outside_the_pattern(&stdout),
+            Vec::<&str>::new(),
+            "without the predictor, {ranks} rank(s)"
+        );
+        assert!(
+            stdout.contains("matrix pattern grown at"),
+            "without the predictor, {ranks} rank(s):\n{stdout}"
+        );
+    }
 }

@@ -92,6 +92,7 @@ fn petsc_layer_boundary_behaviour() {
     // (negative) indices, columns in any order, and entries outside the pattern (kept aside,
     // then added through `MatSetValues`).
     owned_rows_match_set_values(&petsc);
+    preallocated_again_holds_the_new_pattern();
 
     drop(snes);
     drop(jac);
@@ -209,6 +210,28 @@ fn preallocated_pattern_survives_an_empty_assembly() {
     m.assemble().unwrap();
     assert_eq!(m.get_values(&[0], &[0, 1]).unwrap(), vec![1.0, 2.0]);
     drop(m);
+}
+
+/// Check 9: a matrix preallocated anew in place (`Matrix::preallocate_again`, the same PETSc
+/// object) stores exactly the new pattern, as zeros (its old values dropped); an entry of the
+/// new pattern is no new nonzero, and one outside it is allowed now, stored and counted.
+fn preallocated_again_holds_the_new_pattern() {
+    let mut m = Matrix::new_aij(&diagonal_pattern()).unwrap();
+    m.add_values(&[0], &[0], &[1.0]).unwrap();
+    m.assemble().unwrap();
+    let mut wider = diagonal_pattern();
+    wider.rows[0].push(1);
+    m.preallocate_again(&wider).unwrap();
+    assert_eq!(m.stored_entries().unwrap(), N as u64 + 1);
+    assert_eq!(m.get_values(&[0], &[0, 1]).unwrap(), vec![0.0, 0.0]);
+    m.add_values(&[0], &[1], &[2.0]).unwrap();
+    m.assemble().unwrap();
+    assert_eq!(m.stored_entries().unwrap(), N as u64 + 1);
+    m.add_values(&[1], &[0], &[3.0]).unwrap();
+    m.assemble().unwrap();
+    assert_eq!(m.stored_entries().unwrap(), N as u64 + 2);
+    let values = m.get_values(&[0, 1], &[0, 1]).unwrap();
+    assert_eq!(values, vec![0.0, 2.0, 3.0, 0.0]);
 }
 
 /// Check 7: a linear solve through the KSP wrapper: diag(2 x) y = 1 with x = 2, so y = 1/4.

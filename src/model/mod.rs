@@ -228,6 +228,18 @@ pub enum Output {
     Surface(SurfaceOutput),
 }
 
+/// Merges the ascending, distinct `new` into the ascending, distinct `into`; whether `into`
+/// gained an element (the coupled nodes of a pattern row, the primary faces of a held pair).
+pub fn merge_ascending(into: &mut Vec<usize>, new: &[usize]) -> bool {
+    if new.iter().all(|n| into.binary_search(n).is_ok()) {
+        return false;
+    }
+    into.extend_from_slice(new);
+    into.sort_unstable();
+    into.dedup();
+    true
+}
+
 /// One part of the discrete model (module docs).
 ///
 /// Methods marked *collective* are called on every rank together.
@@ -246,8 +258,21 @@ pub trait Contribution {
 
     /// Hands `couple` every set of nodes whose dofs this contribution couples (each set a dense
     /// block of the matrix pattern), at the state `at`: at least every set that has a node whose
-    /// rows this rank owns, on every rank (a rank's pattern is of the rows it owns).
+    /// rows this rank owns, on every rank (a rank's pattern is of the rows it owns). Called only
+    /// to build the solver's pattern: a contribution may record what it handed out (see
+    /// [`Contribution::holds_couplings_of`]).
     fn couplings(&self, at: &State, couple: &mut dyn FnMut(&[usize]));
+
+    /// The matrix pattern is being made anew: the couplings handed out so far are no longer
+    /// all in it (for [`Contribution::holds_couplings_of`]).
+    fn forget_couplings(&self) {}
+
+    /// Whether the couplings handed out since the last [`Contribution::forget_couplings`]
+    /// include every block an evaluation at `at` adds; true where the contribution does not
+    /// keep track (moving couplings: checked before each Newton tangent).
+    fn holds_couplings_of(&self, _at: &State) -> bool {
+        true
+    }
 
     /// Adds this rank's terms of `F(u; t)` to `out`. Returns the issue that makes the state
     /// unusable, if any (the evaluation still completes).

@@ -10,8 +10,10 @@
 //! at the first assembly (the bodies not touching yet) would otherwise lose its slots and cost
 //! one reallocation of the row storage per entry when contact begins (docs/performance.md,
 //! "Assembly and the matrix pattern"). With the pattern kept, the matrix's nonzero structure is
-//! also the same in every Newton iteration of a step, so the LU's symbolic factorization can be
-//! reused.
+//! also the same from one Newton iteration to the next, so the LU's symbolic factorization can
+//! be reused; where a moving contact needs more, the matrix is preallocated anew in place
+//! ([`Matrix::preallocate_again`]), and the zeros it stores raise its nonzero state, from which
+//! the next preconditioner set-up learns of the new pattern.
 //!
 //! **Owned entries.** The tangent blocks of every contribution go to the rows this rank owns
 //! straight into the stored values (`super::owned_rows`), not through `MatSetValues`.
@@ -74,7 +76,6 @@ impl Matrix {
             super::options::set_default("-matstash_legacy", "true")?;
         }
         let n = to_petsc_int(sparsity.rows.len())?;
-        let (d_nnz, o_nnz) = sparsity.nnz();
         let mut raw: p::Mat = std::ptr::null_mut();
         chk!(MatCreate(super::comm(), &mut raw))?;
         let m = Matrix { raw };
@@ -86,23 +87,39 @@ impl Matrix {
             p::PETSC_DETERMINE
         ))?;
         chk!(MatSetType(m.raw, c"aij".as_ptr()))?;
-        // Both calls are made; PETSc ignores the one that does not match the actual type.
-        chk!(MatSeqAIJSetPreallocation(m.raw, 0, d_nnz.as_ptr()))?;
-        chk!(MatMPIAIJSetPreallocation(
-            m.raw,
-            0,
-            d_nnz.as_ptr(),
-            0,
-            o_nnz.as_ptr()
-        ))?;
+        let mut m = m;
+        m.preallocate(sparsity)?;
         chk!(MatSetOption(
             m.raw,
             p::MatOption::MAT_NEW_NONZERO_ALLOCATION_ERR,
             p::PetscBool::PETSC_TRUE
         ))?;
-        let mut m = m;
-        m.store_pattern(sparsity)?;
         Ok(m)
+    }
+
+    /// Gives the matrix the pattern `sparsity` in place, entries outside it allowed
+    /// ([`Matrix::allow_new_nonzeros`]): the same PETSc object, so that a solver holding it
+    /// keeps it, with its values dropped and a new nonzero pattern, which the next
+    /// preconditioner set-up sees. Collective.
+    pub fn preallocate_again(&mut self, sparsity: &Sparsity) -> Result<()> {
+        self.preallocate(sparsity)?;
+        self.allow_new_nonzeros()
+    }
+
+    /// Preallocates `sparsity` exactly and stores zeros on it ([`Matrix::store_pattern`]); on
+    /// a matrix preallocated before, PETSc drops its old pattern first. Collective.
+    fn preallocate(&mut self, sparsity: &Sparsity) -> Result<()> {
+        let (d_nnz, o_nnz) = sparsity.nnz();
+        // Both calls are made; PETSc ignores the one that does not match the actual type.
+        chk!(MatSeqAIJSetPreallocation(self.raw, 0, d_nnz.as_ptr()))?;
+        chk!(MatMPIAIJSetPreallocation(
+            self.raw,
+            0,
+            d_nnz.as_ptr(),
+            0,
+            o_nnz.as_ptr()
+        ))?;
+        self.store_pattern(sparsity)
     }
 
     /// Inserts a zero at every entry of `sparsity` and assembles, so that the final assembly

@@ -20,7 +20,9 @@
 
 use crate::dofs::DofMap;
 use crate::error::Result;
-use crate::model::{Contribution, DomainIssue, ForceSink, Model, NodalForces, State, TangentSink};
+use crate::model::{
+    merge_ascending, Contribution, DomainIssue, ForceSink, Model, NodalForces, State, TangentSink,
+};
 use crate::petsc::{Matrix, OwnedRows, PetscInt, Sparsity, Vector};
 
 /// Residual blocks into a PETSc vector.
@@ -191,12 +193,7 @@ impl Pattern {
             }
             new.sort_unstable();
             new.dedup();
-            if new.iter().any(|n| row.binary_search(n).is_err()) {
-                row.extend(new);
-                row.sort_unstable();
-                row.dedup();
-                grew = true;
-            }
+            grew |= merge_ascending(row, &new);
         }
         grew
     }

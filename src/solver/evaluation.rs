@@ -26,6 +26,11 @@ pub(super) struct Evaluator {
     /// Tangent entries this rank's rows gained outside the matrix pattern since the last reset
     /// ([`Matrix::stored_entries`]; PETSc reallocates the rows for them).
     pub outside_pattern: u64,
+    /// Newton iterates at which the matrix pattern grew since the last reset, and the seconds
+    /// of its checks and growth there ([`super::pattern_update::hold_iterate`]; the count is
+    /// the same on every rank).
+    pub pattern_grown: u64,
+    pub pattern_seconds: f64,
 }
 
 impl Evaluator {
@@ -36,6 +41,8 @@ impl Evaluator {
             t: 1.0,
             assembly_seconds: 0.0,
             outside_pattern: 0,
+            pattern_grown: 0,
+            pattern_seconds: 0.0,
         }
     }
 

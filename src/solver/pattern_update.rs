@@ -21,16 +21,27 @@
 //! Whenever the pattern changes on some rank every rank makes a new matrix with it
 //! (collectively). Both updates are timed in the `pattern` phase (a PETSc log stage too), which
 //! a scene without moving couplings never enters.
+//!
+//! Inside a step the Newton iterates stray from the two states. Before each Newton tangent
+//! [`hold_iterate`] asks the moving contributions whether the couplings they handed out hold
+//! those of the iterate (contact: one search, the pairs compared); where they do not on some
+//! rank, the pattern grows by the iterate's couplings and the matrix is preallocated anew in
+//! place (the nonlinear solver holds it), so that its entries never fall outside the pattern,
+//! for which PETSc would reallocate the rows entry by entry. That time counts in the `pattern`
+//! phase too.
 
 use std::time::Instant;
 
 use crate::error::Result;
 use crate::model::Contribution;
 
+use super::assembly::Pattern;
 use super::collective::{any_rank, sum_over_ranks};
+use super::evaluation::Evaluation;
 use super::predictor::NewtonTangent;
 use super::setup::new_matrix;
 use super::Run;
+use crate::petsc::{Matrix, Vector};
 
 /// The phase (`summary.json`'s `timings`, and a PETSc log stage) of the pattern updates and
 /// the new matrices they make.
@@ -76,6 +87,7 @@ impl Run<'_> {
         let mut renewed = self.linear.fixed_pattern.clone();
         {
             let moving = moving_parts(&self.model);
+            moving.iter().for_each(|part| part.forget_couplings());
             let mut ev = self.cx.evaluator.borrow_mut();
             for (load, x) in [(t, &self.linear.x_prev), (t_new, &self.linear.x)] {
                 ev.t = load;
@@ -109,6 +121,51 @@ impl Run<'_> {
         linear.tangent.newton = NewtonTangent::Other;
         Ok(())
     }
+}
+
+/// Before a Newton tangent at `x`: where the couplings the moving contributions handed out do
+/// not hold those of `x` on some rank, grows `pattern` by them and, where it grew on some
+/// rank, preallocates `jac` anew with it (module docs); counted and timed in the evaluator
+/// (*collective*).
+pub(super) fn hold_iterate(
+    ev: &Evaluation,
+    pattern: &mut Pattern,
+    x: &Vector,
+    jac: &mut Matrix,
+) -> Result<()> {
+    let moving = moving_parts(ev.model);
+    if moving.is_empty() {
+        return Ok(());
+    }
+    let started = Instant::now();
+    let grew = grow_to_hold(ev, pattern, x, &moving)?;
+    if grew {
+        jac.preallocate_again(&pattern.sparsity(&ev.cx.dofs))?;
+    }
+    let mut evaluator = ev.cx.evaluator.borrow_mut();
+    evaluator.pattern_grown += u64::from(grew);
+    evaluator.pattern_seconds += started.elapsed().as_secs_f64();
+    Ok(())
+}
+
+/// [`hold_iterate`]'s check and growth of `pattern`; whether it grew on some rank
+/// (*collective*).
+fn grow_to_hold(
+    ev: &Evaluation,
+    pattern: &mut Pattern,
+    x: &Vector,
+    moving: &[&dyn Contribution],
+) -> Result<bool> {
+    let (cx, world) = (ev.cx, &ev.cx.world);
+    let mut evaluator = cx.evaluator.borrow_mut();
+    evaluator.load(cx.scene, &cx.dofs, x)?;
+    let at = evaluator.state(cx.scene);
+    let held = moving.iter().all(|part| part.holds_couplings_of(&at));
+    if !any_rank(world, !held) {
+        return Ok(false);
+    }
+    let grew = pattern.add(&cx.dofs, &at, moving.iter().copied());
+    Ok(any_rank(world, grew))
 }
 
 /// The contributions whose couplings move with the displacements.

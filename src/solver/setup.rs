@@ -214,8 +214,9 @@ pub(super) fn new_matrix(
     let mut jac = Matrix::new_aij(&pattern.sparsity(dofs))?;
     jac.set_near_null_space(rigid_modes)?;
     if couplings_move {
-        // A moving stencil may reach past the pattern inside a step: PETSc then makes room for
-        // it (counted, `Matrix::stored_entries`) instead of failing.
+        // A moving stencil the pattern does not hold (node-on-segment's, which is not checked
+        // at the iterates) gets room from PETSc (counted, `Matrix::stored_entries`) instead of
+        // failing.
         jac.allow_new_nonzeros()?;
     }
     Ok(jac)

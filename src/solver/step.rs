@@ -16,6 +16,7 @@ use super::assembly;
 use super::collective::{any_rank, sum_over_ranks};
 use super::cut::{cut_limit, describe, what_to_change};
 use super::evaluation::{Evaluation, Verdict};
+use super::pattern_update::{hold_iterate, PATTERN_PHASE};
 use super::predictor::{predict, NewtonTangent};
 use super::results::StepRow;
 use super::summary::{not_started, retries_note, Load};
@@ -46,6 +47,8 @@ struct Counted {
     bilateral: Option<bool>,
     /// Tangent entries added outside the matrix pattern, over all ranks.
     outside_pattern: u64,
+    /// Newton iterates at which the matrix pattern grew (`hold_iterate`).
+    pattern_grown: u64,
 }
 
 impl Counted {
@@ -92,6 +95,7 @@ impl Run<'_> {
         {
             let mut ev = self.cx.evaluator.borrow_mut();
             (ev.assembly_seconds, ev.outside_pattern) = (0.0, 0);
+            (ev.pattern_seconds, ev.pattern_grown) = (0.0, 0);
         }
         // The contributions' timed work of this step's evaluations, the predictor's included.
         let timed_before = self.model.phase_seconds();
@@ -112,6 +116,7 @@ impl Run<'_> {
         self.state.counts.newton += solved.counted.newton;
         let seconds = self.account_time(started, pattern_seconds, &timed_before);
         solved.counted.outside_pattern = self.step_outside_pattern();
+        solved.counted.pattern_grown = self.cx.evaluator.borrow().pattern_grown;
         self.check_null_pivots(t_new)?;
         if solved.outcome.converged {
             return self.finish_step(&solved, t_new, seconds, false);
@@ -383,6 +388,8 @@ impl Run<'_> {
             let _stage = assembly_stage.map(|st| st.push()).transpose()?;
             ev.residual(x, f)?
         };
+        let pattern_stage = self.phases.stage(PATTERN_PHASE);
+        let pattern = &mut self.linear.pattern;
         let mut jacobian = |x: &_, j: &mut _| -> Result<(), CallbackError> {
             // Once per Newton iteration, before its costly part. As a domain error, SNES ends
             // the solve cleanly (not converged); the step loop stops on it.
@@ -390,6 +397,10 @@ impl Run<'_> {
                 stop.set(Some(signal));
                 let name = interrupt::name(signal);
                 return Err(CallbackError::Domain(format!("interrupted by {name}")));
+            }
+            {
+                let _stage = pattern_stage.map(|st| st.push()).transpose()?;
+                hold_iterate(&ev, pattern, x, j)?;
             }
             let _stage = assembly_stage.map(|st| st.push()).transpose()?;
             report(ev.jacobian(x, j)?)
@@ -414,9 +425,12 @@ impl Run<'_> {
             .model
             .pattern_moves()
             .then_some(&mut step_limit as &mut StepLimitFn);
-        let l = &mut self.linear;
-        l.snes
-            .solve_limited(&mut l.x, &mut l.jac, (&mut residual, &mut jacobian), limit)
+        let (snes, x, jac) = (
+            &mut self.linear.snes,
+            &mut self.linear.x,
+            &mut self.linear.jac,
+        );
+        snes.solve_limited(x, jac, (&mut residual, &mut jacobian), limit)
     }
 
     /// After a converged solve: one Uzawa step of the augmented contributions. Returns true
@@ -462,8 +476,12 @@ impl Run<'_> {
         pattern_seconds: f64,
         timed_before: &std::collections::BTreeMap<&'static str, f64>,
     ) -> StepSeconds {
-        let assembly = self.cx.evaluator.borrow().assembly_seconds;
-        let total = started.elapsed().as_secs_f64() - pattern_seconds;
+        let (assembly, held) = {
+            let ev = self.cx.evaluator.borrow();
+            (ev.assembly_seconds, ev.pattern_seconds)
+        };
+        let total = started.elapsed().as_secs_f64() - pattern_seconds - held;
+        self.phases.add(PATTERN_PHASE, held);
         self.phases.add("assembly", assembly);
         self.phases.add("solve", (total - assembly).max(0.0));
         let mut timed = 0.0;
@@ -528,7 +546,7 @@ impl Run<'_> {
             self.state.step + 1,
             Load(t_new),
             outcome.iterations,
-            outside_pattern_note(solved.counted.outside_pattern),
+            pattern_note(&solved.counted),
             match &limit {
                 Some(limit) => limit.clone(),
                 None => format!("cut {}/{max_cuts}", self.state.cuts_in_row),
@@ -682,7 +700,7 @@ impl Run<'_> {
             (true, Some(line_search)) => format!(", started with {line_search}"),
             _ => String::new(),
         };
-        let outside = outside_pattern_note(solved.counted.outside_pattern);
+        let pattern = pattern_note(&solved.counted);
         let bilateral = match solved.counted.bilateral {
             Some(true) => ", bilateral",
             Some(false) => ", bilateral undone",
@@ -690,7 +708,7 @@ impl Run<'_> {
         };
         self.say(format!(
             "  step {step} load {load:.6}: {} Newton its{uzawa}, |F| {residual:.3e}{floor}, {} \
-             linear its{bilateral}{led}{}{outside}, {:.2} s",
+             linear its{bilateral}{led}{}{pattern}, {:.2} s",
             solved.counted.newton,
             solved.counted.linear,
             retries_note(
@@ -703,11 +721,17 @@ impl Run<'_> {
     }
 }
 
-/// A progress line's note on the tangent entries a step added outside the matrix pattern
-/// (empty when none), for which PETSc reallocated rows.
-fn outside_pattern_note(entries: u64) -> String {
-    match entries {
+/// A progress line's note on the Newton iterates at which a step grew the matrix pattern, and
+/// on the tangent entries it added outside the pattern, for which PETSc reallocated rows
+/// (empty when neither).
+fn pattern_note(counted: &Counted) -> String {
+    let grown = match counted.pattern_grown {
         0 => String::new(),
-        n => format!(", {n} tangent entries outside the matrix pattern"),
+        1 => ", matrix pattern grown at 1 Newton iterate".to_string(),
+        n => format!(", matrix pattern grown at {n} Newton iterates"),
+    };
+    match counted.outside_pattern {
+        0 => grown,
+        n => format!("{grown}, {n} tangent entries outside the matrix pattern"),
     }
 }

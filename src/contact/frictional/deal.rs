@@ -5,7 +5,7 @@ use mpi::topology::SimpleCommunicator;
 
 use super::carried::{node_values, set_node_values, NODE_VALUES, NO_SEGMENT};
 use super::pass::ContactPass;
-use super::{ContactInterface, ContactInterfaces, EVAL_MARGIN};
+use super::{ContactInterface, ContactInterfaces};
 
 /// The work of a traction node none of whose faces has a candidate pair, in pairs: enough
 /// that a surface out of contact is dealt in equal counts, too little to matter beside a
@@ -77,9 +77,8 @@ impl ContactPass {
     /// The work of each traction node at positions `x`: [`node_work`] of the candidate pairs
     /// the evaluations' search finds there.
     pub(crate) fn node_work_at(&self, x: &[[f64; 3]]) -> Vec<f64> {
-        let all_faces: Vec<usize> = (0..self.sec_faces.len()).collect();
         let pairs: Vec<usize> = self
-            .candidates(x, &all_faces, EVAL_MARGIN)
+            .every_face_candidates(x)
             .iter()
             .map(|(_, ms)| ms.len())
             .collect();

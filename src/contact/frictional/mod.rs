@@ -186,11 +186,17 @@
 //! The pattern of a node's block is every node of the faces carrying it and of the primary faces
 //! their search finds. At the start of each step and at its predicted end (the load-step
 //! predictor's iterate, with `steps.predictor`), the contact contribution hands the solver the
-//! blocks of the pairs found with a search margin of [`PATTERN_MARGIN`] face sizes, twice the
-//! margin the evaluations use ([`EVAL_MARGIN`]); the solver keeps the pattern to those two
-//! states' pairs and the couplings that do not move, and makes a new matrix when it changes
-//! (`solver::pattern_update`). A pair that still falls outside the pattern inside a step costs
-//! PETSc a reallocation, not an error.
+//! blocks of the pairs an evaluation there finds (the evaluations' search margin,
+//! [`EVAL_MARGIN`]); the solver keeps the pattern to those two states' pairs and the couplings
+//! that do not move, and makes a new matrix when it changes (`solver::pattern_update`). A
+//! mortar pass records the pairs it handed out, and before each Newton tangent the solver asks
+//! whether they hold the pairs an evaluation at the iterate finds (one search, no stencils);
+//! where an iterate strayed from the two states, its stencils are added and the matrix
+//! preallocated anew, so that no contact entry falls outside the pattern (PETSc would
+//! reallocate the rows for each). No wider margin is needed, and none is taken: its pairs
+//! would be stored zeros, which an exact solve of the contact rows factorizes as entries.
+//! Node-on-segment passes keep a margin of their own and are not checked: an entry of theirs
+//! outside the pattern costs a reallocation, not an error.
 //!
 //! # Modules
 //!
@@ -272,10 +278,6 @@ pub const TOUCH_TOLERANCE: f64 = 1e-10;
 
 /// Search margin of the evaluations, in secondary-face box diagonals.
 pub const EVAL_MARGIN: f64 = 0.5;
-
-/// Search margin of the matrix pattern made at a step's start and at its predicted end, in
-/// secondary-face box diagonals.
-pub const PATTERN_MARGIN: f64 = 1.0;
 
 /// The deepest penetration, in `h_A`, a Newton update may take a traction node to
 /// ([`ContactInterfaces::reach_fraction`]): within what the evaluations' search still pairs
@@ -467,6 +469,14 @@ impl Contribution for ContactInterfaces {
 
     fn couplings(&self, at: &State, couple: &mut dyn FnMut(&[usize])) {
         self.stencils(at, couple)
+    }
+
+    fn forget_couplings(&self) {
+        self.forget_held_pairs()
+    }
+
+    fn holds_couplings_of(&self, at: &State) -> bool {
+        self.holds_pairs_of(at)
     }
 
     fn residual(&self, at: &State, out: &mut dyn ForceSink) -> Result<Option<DomainIssue>> {

@@ -80,6 +80,10 @@ pub struct ContactPass {
     /// The law states at the last tangent evaluation (of the held nodes; of every node after a
     /// new deal), and their changes.
     pub(crate) state_log: RefCell<StateLog>,
+    /// Per secondary face: the primary faces whose pairs the matrix pattern holds, ascending
+    /// (mortar; recorded as the pattern's stencils are handed out: the `frictional` module
+    /// docs, "Matrix pattern").
+    pub(crate) held_pairs: RefCell<Vec<Vec<usize>>>,
 }
 
 /// A face's type and global nodes.
@@ -147,6 +151,7 @@ impl ContactPass {
             method: iface.method,
             last_values: RefCell::new(None),
             state_log: RefCell::new(StateLog::default()),
+            held_pairs: RefCell::new(Vec::new()),
         };
         pass.deal(&mesh.coords);
         Ok(pass)

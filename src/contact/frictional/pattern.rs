@@ -3,16 +3,17 @@
 
 use crate::case::ContactMethod;
 use crate::contact::search::{Aabb, PrimaryTree};
-use crate::model::State;
+use crate::model::{merge_ascending, State};
 
 use super::pass::{ContactPass, FaceData};
-use super::{ContactInterfaces, PATTERN_MARGIN};
+use super::{ContactInterfaces, EVAL_MARGIN};
 
 impl ContactInterfaces {
     /// Hands `couple` the nodes each traction node couples (its stencil, sorted, each node
-    /// once): the pairs found at `at` with the margin [`PATTERN_MARGIN`] (module docs, "Matrix
-    /// pattern"). Each node of a stencil couples to every other, so the work is the square of
-    /// its length: the nodes that several faces share are handed once.
+    /// once): the pairs an evaluation at `at` finds (module docs, "Matrix pattern"), which a
+    /// mortar pass records as held by the pattern. Each node of a stencil
+    /// couples to every other, so the work is the square of its length: the nodes that several
+    /// faces share are handed once.
     pub(crate) fn stencils(&self, at: &State, couple: &mut dyn FnMut(&[usize])) {
         let x = at.positions();
         for pass in self.interfaces.iter().flat_map(|i| i.passes.iter()) {
@@ -26,6 +27,25 @@ impl ContactInterfaces {
                 couple(&nodes);
             }
         }
+    }
+
+    /// The matrix pattern is being made anew: no pair is held any more.
+    pub(crate) fn forget_held_pairs(&self) {
+        for pass in self.interfaces.iter().flat_map(|i| i.passes.iter()) {
+            pass.held_pairs.borrow_mut().clear();
+        }
+    }
+
+    /// Whether the pairs recorded as held by the matrix pattern include every pair this rank's
+    /// evaluations at `at` find (node-on-segment passes: not tracked, true); every rank's
+    /// answer together covers every face.
+    pub(crate) fn holds_pairs_of(&self, at: &State) -> bool {
+        let x = at.positions();
+        self.interfaces
+            .iter()
+            .flat_map(|i| i.passes.iter())
+            .filter(|pass| pass.method == ContactMethod::Mortar)
+            .all(|pass| pass.holds_pairs_at(&x))
     }
 }
 
@@ -64,11 +84,12 @@ impl ContactPass {
     }
 
     /// Mortar: the nodes each traction node couples (its faces and their candidate primary
-    /// faces at the pattern margin), unsorted.
+    /// faces, as an evaluation finds them), unsorted; the pairs are recorded as held.
     pub(crate) fn mortar_stencils(&self, x: &[[f64; 3]]) -> Vec<Vec<usize>> {
-        let all_faces: Vec<usize> = (0..self.sec_faces.len()).collect();
+        let candidates = self.every_face_candidates(x);
+        self.hold_pairs(&candidates);
         let mut stencil: Vec<Vec<usize>> = vec![Vec::new(); self.nodes.len()];
-        for (s, ms) in self.candidates(x, &all_faces, PATTERN_MARGIN) {
+        for (s, ms) in candidates {
             let mut nodes: Vec<usize> = self.sec_faces[s].nodes.clone();
             for m in ms {
                 nodes.extend(&self.pri_faces[m].nodes);
@@ -78,5 +99,34 @@ impl ContactPass {
             }
         }
         stencil
+    }
+
+    /// Records `candidates` (per secondary face, its primary faces, ascending) as held by the
+    /// matrix pattern.
+    fn hold_pairs(&self, candidates: &[(usize, Vec<usize>)]) {
+        let mut held = self.held_pairs.borrow_mut();
+        held.resize(self.sec_faces.len(), Vec::new());
+        for (s, ms) in candidates {
+            merge_ascending(&mut held[*s], ms);
+        }
+    }
+
+    /// The candidate primary faces of every secondary face at positions `x`, as the
+    /// evaluations search ([`EVAL_MARGIN`]).
+    pub(crate) fn every_face_candidates(&self, x: &[[f64; 3]]) -> Vec<(usize, Vec<usize>)> {
+        let all_faces: Vec<usize> = (0..self.sec_faces.len()).collect();
+        self.candidates(x, &all_faces, EVAL_MARGIN)
+    }
+
+    /// Whether every pair this rank's evaluations at positions `x` find (those of the faces it
+    /// integrates) is recorded as held.
+    fn holds_pairs_at(&self, x: &[[f64; 3]]) -> bool {
+        let held = self.held_pairs.borrow();
+        self.candidates(x, &self.local_faces, EVAL_MARGIN)
+            .iter()
+            .all(|(s, ms)| {
+                let row = held.get(*s).map_or(&[][..], Vec::as_slice);
+                ms.iter().all(|m| row.binary_search(m).is_ok())
+            })
     }
 }

@@ -634,6 +634,48 @@ fn an_update_stays_within_the_search_reach() {
     assert_eq!(contact.reach_fraction(&at, &moved(0, 0.3)), 1.0);
 }
 
+/// The pairs the matrix pattern holds ([`partly_covered_blocks`], the upper block's faces 0.5
+/// wide from x = 0.45, over the lower's 0.25 from 0): none before the pattern's stencils are
+/// handed out; the pairs of the state they were handed out at afterwards, and of a state moved
+/// by much less than the search margin; not those of the upper block slid by -0.4 along x (its
+/// first column of faces then reaches over the lower's first, 0.2 away before, beyond the
+/// margin of 0.18), until the stencils of that state are handed out too; none once forgotten.
+#[test]
+fn the_held_pairs_are_those_the_pattern_was_given() {
+    use crate::model::Contribution;
+    let scene = partly_covered_blocks();
+    let contact = on_one_rank(&scene);
+    let mesh = &scene.mesh;
+    let up = mesh.bodies.iter().position(|b| b == "up").unwrap();
+    let slid = |dx: f64| {
+        let mut u = vec![0.0; 3 * mesh.num_nodes()];
+        for e in (0..mesh.num_elements()).filter(|&e| mesh.body[e] == up) {
+            for &n in mesh.element_nodes(e) {
+                u[3 * n] = dx;
+            }
+        }
+        u
+    };
+    let (rest, near, far) = (slid(0.0), slid(0.001), slid(-0.4));
+    let holds = |u: &[f64]| contact.holds_couplings_of(&state_at(&scene, u));
+    let hand_out = |u: &[f64]| contact.couplings(&state_at(&scene, u), &mut |_| {});
+    assert!(!holds(&rest));
+    hand_out(&rest);
+    assert!(holds(&rest));
+    assert!(holds(&near));
+    assert!(!holds(&far));
+    hand_out(&far);
+    assert!(holds(&far));
+    assert!(holds(&rest));
+    contact.forget_couplings();
+    assert!(!holds(&rest));
+}
+
+/// The state of displacements `u` at full load.
+fn state_at<'a>(scene: &'a Scene, u: &'a [f64]) -> State<'a> {
+    State { scene, u, t: 1.0 }
+}
+
 /// The records of a checkpoint, kept in memory.
 #[derive(Default)]
 struct Records(std::collections::VecDeque<(String, Vec<f64>, Vec<u64>)>);
