@@ -11,11 +11,11 @@
 //!   (and with it the last Newton factorization the predictor may reuse) is kept whenever it
 //!   already holds them;
 //! - at the predicted end of a step (once the load-step predictor, `steps.predictor`, moved the
-//!   iterate; a failed prediction keeps the pattern) it is **renewed**: the fixed couplings, those of the step's start and those of the predicted
-//!   iterate, and nothing else. A step that slides farther than the search margin then still
-//!   finds its pairs inside the pattern, and the couplings a contact zone left behind (or a
-//!   prediction that overshot) are dropped instead of being carried, as stored zeros, to the
-//!   run's end.
+//!   iterate; a failed prediction keeps the pattern) it is **renewed**: the fixed couplings,
+//!   those of the step's start and those of the predicted iterate, and nothing else. A step
+//!   that slides farther than the search margin then still finds its pairs inside the pattern,
+//!   and the couplings a contact zone left behind (or a prediction that overshot) are dropped
+//!   instead of being carried, as stored zeros, to the run's end.
 //!
 //! Without the predictor only the step-start update runs, and the pattern only grows.
 //! Whenever the pattern changes on some rank every rank makes a new matrix with it
@@ -24,11 +24,11 @@
 //!
 //! Inside a step the Newton iterates stray from the two states. Before each Newton tangent
 //! [`hold_iterate`] asks the moving contributions whether the couplings they handed out hold
-//! those of the iterate (contact: one search, the pairs compared); where they do not on some
-//! rank, the pattern grows by the iterate's couplings and the matrix is preallocated anew in
-//! place (the nonlinear solver holds it), so that its entries never fall outside the pattern,
-//! for which PETSc would reallocate the rows entry by entry. That time counts in the `pattern`
-//! phase too.
+//! those of the iterate (contact: the pairs that the residual's search found there, compared
+//! with those handed out); where they do not on some rank, the pattern grows by the iterate's
+//! couplings and the matrix is preallocated anew in place (the nonlinear solver holds it), so
+//! that its entries never fall outside the pattern, for which PETSc would reallocate the rows
+//! entry by entry. That time counts in the `pattern` phase too.
 
 use std::time::Instant;
 

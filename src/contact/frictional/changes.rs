@@ -174,7 +174,7 @@ impl ContactPass {
 impl ContactInterfaces {
     /// Calls `f` with the state log of every pass.
     pub(crate) fn for_each_log(&self, mut f: impl FnMut(&mut StateLog)) {
-        for pass in self.interfaces.iter().flat_map(|i| &i.passes) {
+        for pass in self.passes() {
             f(&mut pass.state_log.borrow_mut());
         }
     }

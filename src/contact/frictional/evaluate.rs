@@ -26,12 +26,15 @@ use super::pass::{ContactPass, FaceData};
 use super::tangent::{Linearization, NodeBlock, Slots};
 use super::{ContactInterface, ContactInterfaces, ContactTimings, EVAL_MARGIN, TOUCH_TOLERANCE};
 
-/// The values-only pairs of a pass at one set of positions, with their statistics.
+/// The values-only pairs of a pass at one set of positions, with the search's candidates and
+/// the pairs' statistics.
 #[derive(Clone, Debug)]
 pub(crate) struct ValuesAt {
     /// Positions of the pass's `surface_nodes`, as bits (so that `-0.0` and NaN compare as
     /// what they are).
     pub(crate) positions: Vec<[u64; 3]>,
+    /// The candidate primary faces of each face this rank integrates ([`ContactPass::candidates`]).
+    pub(crate) candidates: Vec<(usize, Vec<usize>)>,
     pub(crate) pairs: Rc<Vec<PairData>>,
     pub(crate) stats: RejectStats,
 }
@@ -233,7 +236,7 @@ impl ContactPass {
                 .time(|| self.candidates(ctx.x, &faces, EVAL_MARGIN))
         };
         let mut own = RejectStats::default();
-        let integrate = || self.integrate(ctx, candidates, true, &mut own);
+        let integrate = || self.integrate(ctx, &candidates, true, &mut own);
         let pairs = timed.integration.time(integrate);
         (own.non_finite == 0).then_some(pairs)
     }
@@ -290,11 +293,7 @@ impl ContactPass {
         timed: Option<&ContactTimings>,
         stats: &mut RejectStats,
     ) -> Rc<Vec<PairData>> {
-        let positions: Vec<[u64; 3]> = self
-            .surface_nodes
-            .iter()
-            .map(|&n| ctx.x[n].map(f64::to_bits))
-            .collect();
+        let positions = self.surface_positions(ctx.x);
         if let Some(last) = self.last_values.borrow().as_ref() {
             if last.positions == positions {
                 stats.add(&last.stats);
@@ -307,7 +306,7 @@ impl ContactPass {
             None => search(),
         };
         let mut own = RejectStats::default();
-        let integrate = || self.integrate(ctx, candidates, false, &mut own);
+        let mut integrate = || self.integrate(ctx, &candidates, false, &mut own);
         let pairs = Rc::new(match timed {
             Some(t) => t.integration.time(integrate),
             None => integrate(),
@@ -315,10 +314,19 @@ impl ContactPass {
         stats.add(&own);
         *self.last_values.borrow_mut() = Some(ValuesAt {
             positions,
+            candidates,
             pairs: Rc::clone(&pairs),
             stats: own,
         });
         pairs
+    }
+
+    /// The positions `x` of the pass's `surface_nodes`, as bits: the key of `last_values`.
+    pub(crate) fn surface_positions(&self, x: &[[f64; 3]]) -> Vec<[u64; 3]> {
+        self.surface_nodes
+            .iter()
+            .map(|&n| x[n].map(f64::to_bits))
+            .collect()
     }
 
     /// Integrates every candidate pair (secondary face, its candidate primary faces; see
@@ -327,15 +335,15 @@ impl ContactPass {
     pub(crate) fn integrate(
         &self,
         ctx: &EvalContext,
-        candidates: Vec<(usize, Vec<usize>)>,
+        candidates: &[(usize, Vec<usize>)],
         tangent: bool,
         stats: &mut RejectStats,
     ) -> Vec<PairData> {
         let mut out = Vec::new();
-        for (s, ms) in candidates {
+        for &(s, ref ms) in candidates {
             let sf = &self.sec_faces[s];
             let sx: Vec<[f64; 3]> = sf.nodes.iter().map(|&n| ctx.x[n]).collect();
-            for m in ms {
+            for &m in ms {
                 let pf = &self.pri_faces[m];
                 let px: Vec<[f64; 3]> = pf.nodes.iter().map(|&n| ctx.x[n]).collect();
                 let mut opts = IntegrationOptions::for_faces(ctx.scheme, sf.kind, pf.kind);

@@ -183,20 +183,20 @@
 //!
 //! # Matrix pattern
 //!
-//! The pattern of a node's block is every node of the faces carrying it and of the primary faces
-//! their search finds. At the start of each step and at its predicted end (the load-step
+//! The pattern of a node's block is every node of the faces carrying it and of the primary
+//! faces their search finds. At the start of each step and at its predicted end (the load-step
 //! predictor's iterate, with `steps.predictor`), the contact contribution hands the solver the
 //! blocks of the pairs an evaluation there finds (the evaluations' search margin,
 //! [`EVAL_MARGIN`]); the solver keeps the pattern to those two states' pairs and the couplings
 //! that do not move, and makes a new matrix when it changes (`solver::pattern_update`). A
 //! mortar pass records the pairs it handed out, and before each Newton tangent the solver asks
-//! whether they hold the pairs an evaluation at the iterate finds (one search, no stencils);
-//! where an iterate strayed from the two states, its stencils are added and the matrix
-//! preallocated anew, so that no contact entry falls outside the pattern (PETSc would
-//! reallocate the rows for each). No wider margin is needed, and none is taken: its pairs
-//! would be stored zeros, which an exact solve of the contact rows factorizes as entries.
-//! Node-on-segment passes keep a margin of their own and are not checked: an entry of theirs
-//! outside the pattern costs a reallocation, not an error.
+//! whether they hold the pairs an evaluation at the iterate finds (those the residual at the
+//! iterate found, kept with its values; no stencils); where an iterate strayed from the two
+//! states, its stencils are added and the matrix preallocated anew, so that no contact entry
+//! falls outside the pattern (PETSc would reallocate the rows for each). No wider margin is
+//! needed, and none is taken: its pairs would be stored zeros, which an exact solve of the
+//! contact rows factorizes as entries. Node-on-segment passes keep a margin of their own and
+//! are not checked: an entry of theirs outside the pattern costs a reallocation, not an error.
 //!
 //! # Modules
 //!
@@ -444,12 +444,15 @@ impl ContactInterfaces {
         Ok(failure)
     }
 
+    /// Every pass of every interface, in order.
+    pub(crate) fn passes(&self) -> impl Iterator<Item = &ContactPass> {
+        self.interfaces.iter().flat_map(|i| &i.passes)
+    }
+
     /// Every node of every contact surface (whose displacements every rank gathers).
     pub fn nodes(&self) -> Vec<usize> {
         let mut n: Vec<usize> = self
-            .interfaces
-            .iter()
-            .flat_map(|i| i.passes.iter())
+            .passes()
             .flat_map(|p| p.surface_nodes.iter().copied())
             .collect();
         n.sort_unstable();

@@ -1,6 +1,8 @@
 //! The search for candidate face pairs, and the nodes each traction node couples in the
 //! matrix pattern.
 
+use std::borrow::Cow;
+
 use crate::case::ContactMethod;
 use crate::contact::search::{Aabb, PrimaryTree};
 use crate::model::{merge_ascending, State};
@@ -11,12 +13,12 @@ use super::{ContactInterfaces, EVAL_MARGIN};
 impl ContactInterfaces {
     /// Hands `couple` the nodes each traction node couples (its stencil, sorted, each node
     /// once): the pairs an evaluation at `at` finds (module docs, "Matrix pattern"), which a
-    /// mortar pass records as held by the pattern. Each node of a stencil
-    /// couples to every other, so the work is the square of its length: the nodes that several
-    /// faces share are handed once.
+    /// mortar pass records as held by the pattern. Each node of a stencil couples to every
+    /// other, so the work is the square of its length: the nodes that several faces share are
+    /// handed once.
     pub(crate) fn stencils(&self, at: &State, couple: &mut dyn FnMut(&[usize])) {
         let x = at.positions();
-        for pass in self.interfaces.iter().flat_map(|i| i.passes.iter()) {
+        for pass in self.passes() {
             let stencils = match pass.method {
                 ContactMethod::Mortar => pass.mortar_stencils(&x),
                 ContactMethod::NodeOnSegment => pass.nts_stencils(&x),
@@ -31,7 +33,7 @@ impl ContactInterfaces {
 
     /// The matrix pattern is being made anew: no pair is held any more.
     pub(crate) fn forget_held_pairs(&self) {
-        for pass in self.interfaces.iter().flat_map(|i| i.passes.iter()) {
+        for pass in self.passes() {
             pass.held_pairs.borrow_mut().clear();
         }
     }
@@ -41,9 +43,7 @@ impl ContactInterfaces {
     /// answer together covers every face.
     pub(crate) fn holds_pairs_of(&self, at: &State) -> bool {
         let x = at.positions();
-        self.interfaces
-            .iter()
-            .flat_map(|i| i.passes.iter())
+        self.passes()
             .filter(|pass| pass.method == ContactMethod::Mortar)
             .all(|pass| pass.holds_pairs_at(&x))
     }
@@ -119,14 +119,18 @@ impl ContactPass {
     }
 
     /// Whether every pair this rank's evaluations at positions `x` find (those of the faces it
-    /// integrates) is recorded as held.
+    /// integrates) is recorded as held. Before a tangent the residual has searched at the same
+    /// positions, and its candidates are taken from `last_values` instead of searching again.
     fn holds_pairs_at(&self, x: &[[f64; 3]]) -> bool {
+        let last = self.last_values.borrow();
+        let searched = match last.as_ref() {
+            Some(v) if v.positions == self.surface_positions(x) => Cow::Borrowed(&v.candidates),
+            _ => Cow::Owned(self.candidates(x, &self.local_faces, EVAL_MARGIN)),
+        };
         let held = self.held_pairs.borrow();
-        self.candidates(x, &self.local_faces, EVAL_MARGIN)
-            .iter()
-            .all(|(s, ms)| {
-                let row = held.get(*s).map_or(&[][..], Vec::as_slice);
-                ms.iter().all(|m| row.binary_search(m).is_ok())
-            })
+        searched.iter().all(|(s, ms)| {
+            let row = held.get(*s).map_or(&[][..], Vec::as_slice);
+            ms.iter().all(|m| row.binary_search(m).is_ok())
+        })
     }
 }

@@ -10,7 +10,7 @@ use crate::contact::mortar::RejectStats;
 use crate::contact::mortar::TractionScheme;
 use crate::dofs::DofMap;
 use crate::fe::FaceType;
-use crate::model::State;
+use crate::model::{NodalForces, State};
 use std::collections::BTreeSet;
 
 /// Two Hex8 blocks: the top of the lower one (4 x 4 faces, nodes every 0.25, the secondary
@@ -640,6 +640,7 @@ fn an_update_stays_within_the_search_reach() {
 /// by much less than the search margin; not those of the upper block slid by -0.4 along x (its
 /// first column of faces then reaches over the lower's first, 0.2 away before, beyond the
 /// margin of 0.18), until the stencils of that state are handed out too; none once forgotten.
+/// The same whether the check searches or takes the pairs the residual at the state found.
 #[test]
 fn the_held_pairs_are_those_the_pattern_was_given() {
     use crate::model::Contribution;
@@ -657,18 +658,31 @@ fn the_held_pairs_are_those_the_pattern_was_given() {
         u
     };
     let (rest, near, far) = (slid(0.0), slid(0.001), slid(-0.4));
-    let holds = |u: &[f64]| contact.holds_couplings_of(&state_at(&scene, u));
+    let searching = |u: &[f64]| contact.holds_couplings_of(&state_at(&scene, u));
+    // As before a Newton tangent: the residual at the state searched, and its pairs are kept.
+    let after_residual = |u: &[f64]| {
+        let at = state_at(&scene, u);
+        let mut f = vec![0.0; u.len()];
+        contact.residual(&at, &mut NodalForces(&mut f)).unwrap();
+        let pass = &contact.interfaces[0].passes[0];
+        let kept = pass.last_values.borrow();
+        let kept_at = kept.as_ref().map(|v| &v.positions);
+        assert_eq!(kept_at, Some(&pass.surface_positions(&at.positions())));
+        contact.holds_couplings_of(&at)
+    };
     let hand_out = |u: &[f64]| contact.couplings(&state_at(&scene, u), &mut |_| {});
-    assert!(!holds(&rest));
-    hand_out(&rest);
-    assert!(holds(&rest));
-    assert!(holds(&near));
-    assert!(!holds(&far));
-    hand_out(&far);
-    assert!(holds(&far));
-    assert!(holds(&rest));
-    contact.forget_couplings();
-    assert!(!holds(&rest));
+    for holds in [&searching as &dyn Fn(&[f64]) -> bool, &after_residual] {
+        assert!(!holds(&rest));
+        hand_out(&rest);
+        assert!(holds(&rest));
+        assert!(holds(&near));
+        assert!(!holds(&far));
+        hand_out(&far);
+        assert!(holds(&far));
+        assert!(holds(&rest));
+        contact.forget_couplings();
+        assert!(!holds(&rest));
+    }
 }
 
 /// The state of displacements `u` at full load.
