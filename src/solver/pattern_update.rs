@@ -25,10 +25,11 @@
 //! Inside a step the Newton iterates stray from the two states. Before each Newton tangent
 //! [`hold_iterate`] asks the moving contributions whether the couplings they handed out hold
 //! those of the iterate (contact: the pairs that the residual's search found there, compared
-//! with those handed out); where they do not on some rank, the pattern grows by the iterate's
-//! couplings and the matrix is preallocated anew in place (the nonlinear solver holds it), so
-//! that its entries never fall outside the pattern, for which PETSc would reallocate the rows
-//! entry by entry. That time counts in the `pattern` phase too.
+//! with those handed out; a search of its own where the last residual was at other positions);
+//! where they do not on some rank, the pattern grows by the iterate's couplings and the matrix
+//! is preallocated anew in place (the nonlinear solver holds it), so that its entries never
+//! fall outside the pattern, for which PETSc would reallocate the rows entry by entry. That
+//! time counts in the `pattern` phase too.
 
 use std::time::Instant;
 

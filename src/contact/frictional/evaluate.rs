@@ -286,7 +286,9 @@ impl ContactPass {
     /// times: by a residual and the tangent that follows it at the same point (the law's
     /// inputs; module docs, "Consistent tangent"), and at a converged state by the Uzawa
     /// update, the reactions, the output and the commit of the step. So the last result is
-    /// kept and returned again while the pass's nodes sit at the same positions, bit for bit.
+    /// kept and returned again while the pass's nodes sit at the same positions, bit for bit;
+    /// the search's candidates are kept with it for the matrix pattern's check before a tangent
+    /// (`holds_pairs_at`).
     pub(crate) fn values_at(
         &self,
         ctx: &EvalContext,

@@ -191,12 +191,13 @@
 //! that do not move, and makes a new matrix when it changes (`solver::pattern_update`). A
 //! mortar pass records the pairs it handed out, and before each Newton tangent the solver asks
 //! whether they hold the pairs an evaluation at the iterate finds (those the residual at the
-//! iterate found, kept with its values; no stencils); where an iterate strayed from the two
-//! states, its stencils are added and the matrix preallocated anew, so that no contact entry
-//! falls outside the pattern (PETSc would reallocate the rows for each). No wider margin is
-//! needed, and none is taken: its pairs would be stored zeros, which an exact solve of the
-//! contact rows factorizes as entries. Node-on-segment passes keep a margin of their own and
-//! are not checked: an entry of theirs outside the pattern costs a reallocation, not an error.
+//! iterate found, kept with its values, or a search of its own where the last residual was
+//! elsewhere; no stencils); where an iterate strayed from the two states, its stencils are
+//! added and the matrix preallocated anew, so that no contact entry falls outside the pattern
+//! (PETSc would reallocate the rows for each). No wider margin is needed, and none is taken:
+//! its pairs would be stored zeros, which an exact solve of the contact rows factorizes as
+//! entries. Node-on-segment passes keep a margin of their own and are not checked: an entry of
+//! theirs outside the pattern costs a reallocation, not an error.
 //!
 //! # Modules
 //!
@@ -566,7 +567,7 @@ impl Contribution for ContactInterfaces {
     }
 
     fn has_bilateral_nodes(&self) -> bool {
-        self.interfaces.iter().flat_map(|i| &i.passes).any(|pass| {
+        self.passes().any(|pass| {
             pass.method == ContactMethod::Mortar
                 && pass
                     .held

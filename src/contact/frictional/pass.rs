@@ -75,7 +75,8 @@ pub struct ContactPass {
     pub(crate) method: ContactMethod,
     /// Every node of the pass's faces, ascending: their positions key `last_values`.
     pub(crate) surface_nodes: Vec<usize>,
-    /// The last values-only integration (`ContactPass::values_at`).
+    /// The last values-only integration and its search's candidates (`ContactPass::values_at`;
+    /// the matrix pattern's check takes the candidates).
     pub(crate) last_values: RefCell<Option<ValuesAt>>,
     /// The law states at the last tangent evaluation (of the held nodes; of every node after a
     /// new deal), and their changes.
