@@ -192,6 +192,9 @@ pub struct Snes {
     /// What the multigrid does at the set-up after the next Jacobian
     /// ([`Snes::rebuild_multigrid`]).
     multigrid: Multigrid,
+    /// The linear solver's relative tolerance as the options set it (`-ksp_rtol`), for the
+    /// solves outside Newton while inexact Newton changes it at every Newton step.
+    linear_rtol: f64,
 }
 
 /// The convergence test's own state: the last residual norms of a solve, for
@@ -247,6 +250,7 @@ impl Snes {
             history: Vec::new(),
             cycling: Box::default(),
             multigrid,
+            linear_rtol: 0.0,
         };
         let cycling = &mut *snes.cycling as *mut Cycling as *mut c_void;
         chk!(SNESSetConvergenceTest(
@@ -302,6 +306,7 @@ impl Snes {
                 msg: format!("-snes_max_it {max_it}: must be >= 0"),
             });
         }
+        snes.linear_rtol = ksp_tolerances(ksp_of(snes.raw)?)?.0;
         if snes.factorizes()? {
             super::ksp::probe_factorization().map_err(|e| options_error(options_source, e))?;
         }
@@ -594,23 +599,19 @@ impl Snes {
     }
 
     /// Solves `a x = b` with the solver's own linear solver (sharing its factorization when
-    /// `a` is the Jacobian matrix and unchanged), to the tolerance of a Newton solve's first
-    /// linear solve: under inexact Newton (`-snes_ksp_ew`) Eisenstat and Walker's first
-    /// tolerance (`-snes_ksp_ew_rtol0`), else the options' `-ksp_rtol`. Its one caller, the
-    /// load-step predictor, makes a starting point for Newton, as a Newton step does.
+    /// `a` is the Jacobian matrix and unchanged).
     pub fn linear_solve(&mut self, a: &Matrix, b: &Vector, x: &mut Vector) -> Result<bool> {
         let ksp = ksp_of(self.raw)?;
         chk!(KSPSetOperators(ksp, a.raw, a.raw))?;
-        // Eisenstat-Walker's tolerance is computed from the norms of a running Newton solve,
-        // which a solve outside it lacks: off for this one, which takes the first tolerance
-        // instead of the one the last Newton step left.
+        // Eisenstat-Walker's tolerance (`-snes_ksp_ew`) is computed from the norms of a
+        // running Newton solve, which a solve outside it lacks: off for this one, which takes
+        // the options' own tolerance instead of the last Newton step's.
         let mut ew = p::PetscBool::PETSC_FALSE;
         chk!(SNESKSPGetUseEW(self.raw, &mut ew))?;
         chk!(SNESKSPSetUseEW(self.raw, p::PetscBool::PETSC_FALSE))?;
         if ew == p::PetscBool::PETSC_TRUE {
             let (_, atol, dtol, max_it) = ksp_tolerances(ksp)?;
-            let rtol = self.first_inexact_rtol()?;
-            chk!(KSPSetTolerances(ksp, rtol, atol, dtol, max_it))?;
+            chk!(KSPSetTolerances(ksp, self.linear_rtol, atol, dtol, max_it))?;
         }
         let solved = chk!(KSPSolve(ksp, b.raw, x.raw));
         chk!(SNESKSPSetUseEW(self.raw, ew))?;
@@ -618,25 +619,6 @@ impl Snes {
         let mut reason = p::KSPConvergedReason(0);
         chk!(KSPGetConvergedReason(ksp, &mut reason))?;
         Ok(reason.0 > 0)
-    }
-
-    /// Eisenstat and Walker's tolerance of a Newton solve's first linear solve
-    /// (`-snes_ksp_ew_rtol0`).
-    fn first_inexact_rtol(&self) -> Result<f64> {
-        let mut version: PetscInt = 0;
-        let (mut rtol_0, mut rtol_max, mut gamma, mut alpha, mut alpha2, mut threshold) =
-            (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
-        chk!(SNESKSPGetParametersEW(
-            self.raw,
-            &mut version,
-            &mut rtol_0,
-            &mut rtol_max,
-            &mut gamma,
-            &mut alpha,
-            &mut alpha2,
-            &mut threshold
-        ))?;
-        Ok(rtol_0)
     }
 
     /// Null pivots MUMPS met in the last factorization (`INFOG(28)`, with null-pivot detection

@@ -7,8 +7,7 @@
 //! increment can invert elements on the first iterate). `dF/dt` is a one-sided difference with
 //! `t_n + 1e-6 (t_{n+1} - t_n)`; loads are linear in their curves, prescribed displacements enter
 //! nonlinearly, and the predictor is only a starting point for Newton, so its accuracy is
-//! ample. For a pure load increment it equals the first Newton step; an iterative linear solve
-//! stops at the tolerance of a Newton solve's first step ([`Snes::linear_solve`]).
+//! ample. For a pure load increment it equals the first Newton step.
 //!
 //! With `steps.predictor_tangent = "last_newton"` (the default) the solve reuses the
 //! factorization of the last step's last Newton iteration, `K(x_n^(k-1))`, as PETSc's linear
