@@ -6,8 +6,8 @@
 //! - `triad`: `c = a + 1.5 b` over arrays of [`TRIAD_LEN`] doubles (320 MB each, far beyond
 //!   any cache), [`TRIAD_SWEEPS`] sweeps: memory bound, like the sparse matrix products, the
 //!   multigrid's smoothers and the copies of field matrices of the iterative path.
-//! - `compute`: a chain of multiply-adds on a few registers, [`COMPUTE_STEPS`] steps: bound by
-//!   the core alone.
+//! - `compute`: eight independent chains of multiply-adds in registers, [`COMPUTE_STEPS`]
+//!   steps in all: bound by the core alone.
 //!
 //! Each is run on one thread alone, then on two threads at once (each with its own arrays),
 //! alternated over [`ROUNDS`] rounds. Printed per kernel: the median throughput of one thread
@@ -16,7 +16,7 @@
 //! it (2.0: the second core doubles the throughput; below 1: two together are slower than
 //! one). Threads share the memory system as two ranks on the machine do.
 //!
-//! Run: `cargo bench --bench bandwidth` (about 30 s; 2 GB of memory).
+//! Run: `cargo bench --bench bandwidth` (about 15 s; 2 GB of memory).
 
 use std::hint::black_box;
 use std::thread;
