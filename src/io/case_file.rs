@@ -501,10 +501,12 @@ pub struct NewtonSpec {
     /// PETSc's `-ksp_type` and `-pc_type` options replace the choice.
     #[serde(default)]
     pub linear_solver: LinearSolverSpec,
-    /// The free dofs from which `linear_solver = "auto"` solves iteratively. Default
-    /// `crate::solver::DIRECT_BELOW`, the crossover measured on the refinement family
-    /// (docs/performance.md, "Refinement"), and `crate::solver::LINEAR_DIRECT_BELOW` for a
-    /// linear scene (factorized once for the whole run).
+    /// The free dofs from which `linear_solver = "auto"` solves iteratively. Default: the
+    /// crossover measured for the mesh's elements (docs/performance.md, "The crossover"),
+    /// `crate::solver::DIRECT_BELOW` for first-order ones and
+    /// `crate::solver::DIRECT_BELOW_SECOND_ORDER` where a second-order element is, and
+    /// `crate::solver::LINEAR_DIRECT_BELOW` for a linear scene (factorized once for the whole
+    /// run).
     #[serde(default)]
     pub direct_below: Option<usize>,
 }

@@ -2,10 +2,14 @@
 //!
 //! A direct solve (LU through MUMPS) costs about `n^2` per factorization on these meshes and
 //! an iterative one (GMRES with multigrid and an exact solve on the interfaces' dofs) about
-//! `n` per iteration, with a bounded number of iterations: below [`DIRECT_BELOW`] free dofs the
-//! direct solve is at least as fast (docs/performance.md, "Refinement"), from there on the
-//! iterative one, whose memory and cost per linear iteration grow about as the dofs. PETSc's
-//! `-ksp_type` or `-pc_type` options replace the choice.
+//! `n` per iteration, with a bounded number of iterations: below a crossover the direct solve
+//! is at least as fast, from there on the iterative one, whose memory and cost per linear
+//! iteration grow about as the dofs. The crossover depends on the elements' order: a node of
+//! a second-order mesh couples with two to three times as many dofs as one of a first-order
+//! mesh, which costs the iterative path's matrix products and multigrid more than it costs
+//! the direct solve of as many dofs ([`DIRECT_BELOW`], [`DIRECT_BELOW_SECOND_ORDER`]; the
+//! measurements: docs/performance.md, "The crossover"). PETSc's `-ksp_type` or `-pc_type`
+//! options replace the choice.
 
 use crate::case::Scene;
 use crate::dofs::DofMap;
@@ -14,12 +18,24 @@ use crate::io::case_file::LinearSolverSpec;
 use crate::model::Model;
 use crate::petsc::{options, LinearPath, PetscInt};
 
-/// The free dofs from which `newton.linear_solver = "auto"` solves iteratively.
-pub const DIRECT_BELOW: usize = 20_000;
+/// The free dofs from which `newton.linear_solver = "auto"` solves iteratively, on a mesh of
+/// first-order elements (Hex8, Tet4).
+pub const DIRECT_BELOW: usize = 5_000;
+
+/// [`DIRECT_BELOW`] on a mesh with second-order elements (Hex20, Hex27, Tet10).
+pub const DIRECT_BELOW_SECOND_ORDER: usize = 15_000;
 
 /// [`DIRECT_BELOW`] for a linear scene: its tangent is factorized once for the whole run, so
 /// the direct solve stays the faster far longer, until its memory grows too large.
 pub const LINEAR_DIRECT_BELOW: usize = 150_000;
+
+/// The free dofs from which `auto` solves iteratively, and where that number comes from (for
+/// the run's first lines).
+#[derive(Debug, Clone, Copy)]
+struct Crossover {
+    direct_below: usize,
+    basis: &'static str,
+}
 
 /// The linear solver of a run, and why, for its first lines.
 #[derive(Debug, Clone)]
@@ -32,19 +48,35 @@ pub(super) struct LinearChoice {
 /// (the iterative path then splits their dofs off).
 pub(super) fn choose(scene: &Scene, free_dofs: usize, interfaces: bool) -> Result<LinearChoice> {
     let from_options = options::has("-ksp_type")? || options::has("-pc_type")?;
-    let default_below = if scene.is_linear() {
-        LINEAR_DIRECT_BELOW
-    } else {
-        DIRECT_BELOW
+    let crossover = match scene.newton.direct_below {
+        Some(direct_below) => Crossover {
+            direct_below,
+            basis: "newton.direct_below",
+        },
+        None => default_crossover(scene),
     };
-    let below = scene.newton.direct_below.unwrap_or(default_below);
-    let spec = (scene.newton.linear_solver, below);
+    let spec = (scene.newton.linear_solver, crossover);
     Ok(decide(spec, free_dofs, interfaces, from_options))
+}
+
+/// The crossover of a scene that does not set `newton.direct_below`.
+fn default_crossover(scene: &Scene) -> Crossover {
+    let (direct_below, basis) = if scene.is_linear() {
+        (LINEAR_DIRECT_BELOW, "a linear scene")
+    } else if scene.mesh.types.iter().any(|t| t.order() > 1) {
+        (DIRECT_BELOW_SECOND_ORDER, "second-order elements")
+    } else {
+        (DIRECT_BELOW, "first-order elements")
+    };
+    Crossover {
+        direct_below,
+        basis,
+    }
 }
 
 /// [`choose`], given whether PETSc's options choose the solver.
 fn decide(
-    (spec, direct_below): (LinearSolverSpec, usize),
+    (spec, crossover): (LinearSolverSpec, Crossover),
     free_dofs: usize,
     interfaces: bool,
     from_options: bool,
@@ -52,17 +84,21 @@ fn decide(
     let iterative = LinearPath::Iterative {
         interface_split: interfaces,
     };
+    let Crossover {
+        direct_below,
+        basis,
+    } = crossover;
     let (path, why) = match spec {
         _ if from_options => (LinearPath::Direct, "PETSc's options".to_string()),
         LinearSolverSpec::Direct => (LinearPath::Direct, "newton.linear_solver".into()),
         LinearSolverSpec::Iterative => (iterative, "newton.linear_solver".into()),
         LinearSolverSpec::Auto if free_dofs < direct_below => (
             LinearPath::Direct,
-            format!("{free_dofs} free dofs, below {direct_below}"),
+            format!("{free_dofs} free dofs, below {direct_below} ({basis})"),
         ),
         LinearSolverSpec::Auto => (
             iterative,
-            format!("{free_dofs} free dofs, from {direct_below} on"),
+            format!("{free_dofs} free dofs, from {direct_below} on ({basis})"),
         ),
     };
     let what = match (from_options, path) {
@@ -100,12 +136,33 @@ pub(super) fn interface_dofs(model: &Model, dofs: &DofMap) -> Vec<PetscInt> {
 mod tests {
     use super::*;
 
+    /// A scene's own crossover: by its elements' order, or a linear scene's (shipped cases).
+    #[test]
+    fn the_crossover_follows_the_elements_order() {
+        let crossover = |case: &str| {
+            let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(case);
+            let c = default_crossover(&Scene::load(&path).unwrap());
+            (c.direct_below, c.basis)
+        };
+        let first = (DIRECT_BELOW, "first-order elements");
+        assert_eq!(crossover("cases/refinement/hex8_1.toml"), first);
+        let second = (DIRECT_BELOW_SECOND_ORDER, "second-order elements");
+        assert_eq!(crossover("cases/refinement/hex27_1.toml"), second);
+        assert_eq!(crossover("cases/hertz/case.toml"), second);
+        let linear = (LINEAR_DIRECT_BELOW, "a linear scene");
+        assert_eq!(crossover("cases/thick_sphere_tied/case.toml"), linear);
+    }
+
     /// `auto` takes the direct path below the crossover and the iterative one from it on, with
     /// the interfaces split off when there are some; a forced choice holds at any size; PETSc's
     /// options override everything.
     #[test]
     fn the_path_follows_the_size_unless_chosen() {
-        let auto = (LinearSolverSpec::Auto, 1000);
+        let at = |direct_below| Crossover {
+            direct_below,
+            basis: "newton.direct_below",
+        };
+        let auto = (LinearSolverSpec::Auto, at(1000));
         let path = |spec, dofs, interfaces, options| decide(spec, dofs, interfaces, options).path;
         assert_eq!(path(auto, 999, true, false), LinearPath::Direct);
         let split = LinearPath::Iterative {
@@ -118,9 +175,9 @@ mod tests {
                 interface_split: false
             }
         );
-        let direct = (LinearSolverSpec::Direct, 1000);
+        let direct = (LinearSolverSpec::Direct, at(1000));
         assert_eq!(path(direct, 1_000_000, true, false), LinearPath::Direct);
-        let iterative = (LinearSolverSpec::Iterative, 1000);
+        let iterative = (LinearSolverSpec::Iterative, at(1000));
         assert_eq!(path(iterative, 10, true, false), split);
         let chosen = decide(iterative, 10, true, true);
         assert!(
@@ -132,7 +189,7 @@ mod tests {
         assert_eq!(
             why,
             "iterative (GMRES; an exact solve on the interfaces' dofs, then multigrid): 5000 \
-             free dofs, from 1000 on"
+             free dofs, from 1000 on (newton.direct_below)"
         );
     }
 }
