@@ -502,11 +502,11 @@ pub struct NewtonSpec {
     #[serde(default)]
     pub linear_solver: LinearSolverSpec,
     /// The free dofs from which `linear_solver = "auto"` solves iteratively. Default: the
-    /// crossover measured for the mesh's elements (docs/performance.md, "The crossover"),
-    /// `crate::solver::DIRECT_BELOW` for first-order ones and
-    /// `crate::solver::DIRECT_BELOW_SECOND_ORDER` where a second-order element is, and
-    /// `crate::solver::LINEAR_DIRECT_BELOW` for a linear scene (factorized once for the whole
-    /// run).
+    /// threshold measured for the mesh's elements (docs/performance.md, "The crossover by the
+    /// elements' order"), `crate::solver::DIRECT_BELOW` for first-order ones,
+    /// `crate::solver::DIRECT_BELOW_SECOND_ORDER` when the mesh has any second-order element,
+    /// and `crate::solver::LINEAR_DIRECT_BELOW` for a linear scene (factorized once for the
+    /// whole run).
     #[serde(default)]
     pub direct_below: Option<usize>,
 }

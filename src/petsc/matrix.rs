@@ -231,6 +231,19 @@ impl Matrix {
     pub fn mult(&self, x: &super::Vector, y: &mut super::Vector) -> Result<()> {
         chk!(MatMult(self.raw, x.raw, y.raw))
     }
+
+    /// Whether the matrix is assembled (`MatAssembled`): an evaluation that failed midway may
+    /// leave it open.
+    pub fn is_assembled(&self) -> Result<bool> {
+        let mut assembled = p::PetscBool::PETSC_FALSE;
+        chk!(MatAssembled(self.raw, &mut assembled))?;
+        Ok(assembled == p::PetscBool::PETSC_TRUE)
+    }
+
+    /// The diagonal of the owned rows (`MatGetDiagonal`), into `d`.
+    pub fn diagonal(&self, d: &mut super::Vector) -> Result<()> {
+        chk!(MatGetDiagonal(self.raw, d.raw))
+    }
 }
 
 /// `MatSetValues` with `ADD_VALUES` of a dense row-major block (sizes checked by the callers).

@@ -2,14 +2,15 @@
 //!
 //! A direct solve (LU through MUMPS) costs about `n^2` per factorization on these meshes and
 //! an iterative one (GMRES with multigrid and an exact solve on the interfaces' dofs) about
-//! `n` per iteration, with a bounded number of iterations: below a crossover the direct solve
-//! is at least as fast, from there on the iterative one, whose memory and cost per linear
-//! iteration grow about as the dofs. The crossover depends on the elements' order: a node of
-//! a second-order mesh couples with two to three times as many dofs as one of a first-order
-//! mesh, which costs the iterative path's matrix products and multigrid more than it costs
-//! the direct solve of as many dofs ([`DIRECT_BELOW`], [`DIRECT_BELOW_SECOND_ORDER`]; the
-//! measurements: docs/performance.md, "The crossover"). PETSc's `-ksp_type` or `-pc_type`
-//! options replace the choice.
+//! `n` per iteration, with a bounded number of iterations, so the iterative path wins from
+//! some size on, and its memory and cost per linear iteration grow about as the dofs. Below a
+//! threshold `auto` still solves directly, where the runs are short: the direct solve needs no
+//! iteration to converge, whatever the tangent's condition. The threshold
+//! depends on the elements' order ([`DIRECT_BELOW`], [`DIRECT_BELOW_SECOND_ORDER`]): where the
+//! iterative path overtakes the direct one depends on how many linear iterations the
+//! multigrid takes, which second-order elements on graded meshes raise most (the
+//! measurements: docs/performance.md, "The crossover by the elements' order"). PETSc's
+//! `-ksp_type` or `-pc_type` options replace the choice.
 
 use crate::case::Scene;
 use crate::dofs::DofMap;
@@ -22,11 +23,12 @@ use crate::petsc::{options, LinearPath, PetscInt};
 /// first-order elements (Hex8, Tet4).
 pub const DIRECT_BELOW: usize = 5_000;
 
-/// [`DIRECT_BELOW`] on a mesh with second-order elements (Hex20, Hex27, Tet10).
+/// [`DIRECT_BELOW`] on a mesh with at least one second-order element (Hex20, Hex27, Tet10).
 pub const DIRECT_BELOW_SECOND_ORDER: usize = 15_000;
 
-/// [`DIRECT_BELOW`] for a linear scene: its tangent is factorized once for the whole run, so
-/// the direct solve stays the faster far longer, until its memory grows too large.
+/// The threshold of a linear scene, whatever its elements: its tangent is factorized once for
+/// the whole run, so the direct solve stays the faster far longer, until its memory grows too
+/// large.
 pub const LINEAR_DIRECT_BELOW: usize = 150_000;
 
 /// The free dofs from which `auto` solves iteratively, and where that number comes from (for
@@ -34,7 +36,7 @@ pub const LINEAR_DIRECT_BELOW: usize = 150_000;
 #[derive(Debug, Clone, Copy)]
 struct Crossover {
     direct_below: usize,
-    basis: &'static str,
+    source: &'static str,
 }
 
 /// The linear solver of a run, and why, for its first lines.
@@ -48,29 +50,23 @@ pub(super) struct LinearChoice {
 /// (the iterative path then splits their dofs off).
 pub(super) fn choose(scene: &Scene, free_dofs: usize, interfaces: bool) -> Result<LinearChoice> {
     let from_options = options::has("-ksp_type")? || options::has("-pc_type")?;
-    let crossover = match scene.newton.direct_below {
-        Some(direct_below) => Crossover {
-            direct_below,
-            basis: "newton.direct_below",
-        },
-        None => default_crossover(scene),
-    };
-    let spec = (scene.newton.linear_solver, crossover);
+    let spec = (scene.newton.linear_solver, crossover(scene));
     Ok(decide(spec, free_dofs, interfaces, from_options))
 }
 
-/// The crossover of a scene that does not set `newton.direct_below`.
-fn default_crossover(scene: &Scene) -> Crossover {
-    let (direct_below, basis) = if scene.is_linear() {
-        (LINEAR_DIRECT_BELOW, "a linear scene")
-    } else if scene.mesh.types.iter().any(|t| t.order() > 1) {
-        (DIRECT_BELOW_SECOND_ORDER, "second-order elements")
-    } else {
-        (DIRECT_BELOW, "first-order elements")
+/// The scene's `newton.direct_below`, or without it the threshold of its kind.
+fn crossover(scene: &Scene) -> Crossover {
+    let (direct_below, source) = match scene.newton.direct_below {
+        Some(direct_below) => (direct_below, "newton.direct_below"),
+        None if scene.is_linear() => (LINEAR_DIRECT_BELOW, "a linear scene"),
+        None if scene.mesh.types.iter().any(|t| t.order() > 1) => {
+            (DIRECT_BELOW_SECOND_ORDER, "second-order elements")
+        }
+        None => (DIRECT_BELOW, "first-order elements"),
     };
     Crossover {
         direct_below,
-        basis,
+        source,
     }
 }
 
@@ -86,7 +82,7 @@ fn decide(
     };
     let Crossover {
         direct_below,
-        basis,
+        source,
     } = crossover;
     let (path, why) = match spec {
         _ if from_options => (LinearPath::Direct, "PETSc's options".to_string()),
@@ -94,11 +90,11 @@ fn decide(
         LinearSolverSpec::Iterative => (iterative, "newton.linear_solver".into()),
         LinearSolverSpec::Auto if free_dofs < direct_below => (
             LinearPath::Direct,
-            format!("{free_dofs} free dofs, below {direct_below} ({basis})"),
+            format!("{free_dofs} free dofs, below {direct_below} ({source})"),
         ),
         LinearSolverSpec::Auto => (
             iterative,
-            format!("{free_dofs} free dofs, from {direct_below} on ({basis})"),
+            format!("{free_dofs} free dofs, from {direct_below} on ({source})"),
         ),
     };
     let what = match (from_options, path) {
@@ -136,21 +132,33 @@ pub(super) fn interface_dofs(model: &Model, dofs: &DofMap) -> Vec<PetscInt> {
 mod tests {
     use super::*;
 
-    /// A scene's own crossover: by its elements' order, or a linear scene's (shipped cases).
+    /// A scene's threshold: by its elements' order, or a linear scene's, unless the case sets
+    /// its own (shipped cases).
     #[test]
     fn the_crossover_follows_the_elements_order() {
-        let crossover = |case: &str| {
+        let load = |case: &str, direct_below: Option<i64>| {
             let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(case);
-            let c = default_crossover(&Scene::load(&path).unwrap());
-            (c.direct_below, c.basis)
+            let scene = Scene::load_edited(&path, |table| {
+                if let Some(n) = direct_below {
+                    let mut newton = toml::Table::new();
+                    newton.insert("direct_below".into(), n.into());
+                    table.insert("newton".into(), newton.into());
+                }
+                Ok(())
+            });
+            let c = crossover(&scene.unwrap());
+            (c.direct_below, c.source)
         };
         let first = (DIRECT_BELOW, "first-order elements");
-        assert_eq!(crossover("cases/refinement/hex8_1.toml"), first);
+        assert_eq!(load("cases/refinement/hex8_1.toml", None), first);
         let second = (DIRECT_BELOW_SECOND_ORDER, "second-order elements");
-        assert_eq!(crossover("cases/refinement/hex27_1.toml"), second);
-        assert_eq!(crossover("cases/hertz/case.toml"), second);
+        assert_eq!(load("cases/refinement/hex27_1.toml", None), second);
+        assert_eq!(load("cases/hertz/case.toml", None), second);
         let linear = (LINEAR_DIRECT_BELOW, "a linear scene");
-        assert_eq!(crossover("cases/thick_sphere_tied/case.toml"), linear);
+        assert_eq!(load("cases/thick_sphere_tied/case.toml", None), linear);
+        let own = (1234, "newton.direct_below");
+        assert_eq!(load("cases/refinement/hex27_1.toml", Some(1234)), own);
+        assert_eq!(load("cases/thick_sphere_tied/case.toml", Some(1234)), own);
     }
 
     /// `auto` takes the direct path below the crossover and the iterative one from it on, with
@@ -160,7 +168,7 @@ mod tests {
     fn the_path_follows_the_size_unless_chosen() {
         let at = |direct_below| Crossover {
             direct_below,
-            basis: "newton.direct_below",
+            source: "newton.direct_below",
         };
         let auto = (LinearSolverSpec::Auto, at(1000));
         let path = |spec, dofs, interfaces, options| decide(spec, dofs, interfaces, options).path;

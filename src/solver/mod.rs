@@ -60,6 +60,7 @@ mod linear;
 mod pattern_update;
 mod predictor;
 mod results;
+mod rigid_motion;
 mod setup;
 mod state;
 mod step;

@@ -19,6 +19,7 @@ use super::evaluation::{Evaluation, Verdict};
 use super::pattern_update::{hold_iterate, PATTERN_PHASE};
 use super::predictor::{predict, NewtonTangent};
 use super::results::StepRow;
+use super::rigid_motion;
 use super::summary::{not_started, retries_note, Load};
 use super::{Run, FULL_STEP_CYCLE_PROGRESS, FULL_STEP_ITERATIONS, STICK_PREDICTOR_ITERATIONS};
 
@@ -496,16 +497,35 @@ impl Run<'_> {
     }
 
     /// A singular tangent (the predictor's factorization counts: a linear scene may need no
-    /// Newton step) ends the run.
+    /// Newton step) ends the run: MUMPS's null pivots, or where the linear solver is not a
+    /// MUMPS factorization, a body's rigid motion the tangent does not resist
+    /// (`rigid_motion`). *Collective*.
     fn check_null_pivots(&self, t_new: f64) -> Result<()> {
+        const TAIL: &str = "(constrain it: dirichlet or symmetry sets), or the input degrades \
+                            the tangent (too low a quadrature_degree, an extreme penalty or load)";
+        let load = Load(t_new);
         match self.linear.snes.null_pivots()? {
             Some(n) if n > 0 => Err(Error::Solve(format!(
-                "the tangent stiffness is singular ({n} null pivot(s) at load {}): a body can \
-                 move rigidly (constrain it: dirichlet or symmetry sets), or the input degrades \
-                 the tangent (too low a quadrature_degree, an extreme penalty or load)",
-                Load(t_new)
+                "the tangent stiffness is singular ({n} null pivot(s) at load {load}): a body \
+                 can move rigidly {TAIL}"
             ))),
-            _ => Ok(()),
+            Some(_) => Ok(()),
+            None => {
+                let bodies = &self.cx.scene.mesh.bodies;
+                let free =
+                    rigid_motion::free_bodies(&self.linear.jac, &self.linear.rigid_modes, bodies)?;
+                match free.as_slice() {
+                    [] => Ok(()),
+                    free => Err(Error::Solve(format!(
+                        "the tangent stiffness is singular at load {load}: body {} can move \
+                         rigidly {TAIL}",
+                        free.iter()
+                            .map(|b| format!("'{b}'"))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ))),
+                }
+            }
         }
     }
 
