@@ -20,6 +20,21 @@ fn phases_are_petsc_log_stages() {
     }
 }
 
+/// Runs `case` on `ranks` ranks, which must fail with one error line: that line and the
+/// output folder.
+fn failed_run(case: &std::path::Path, ranks: usize) -> (String, std::path::PathBuf) {
+    let out_dir = case.parent().unwrap().join(format!("out{ranks}"));
+    let out = common::run_raw(case, ranks, &out_dir, &["-q"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{ranks} rank(s): {stderr}");
+    let errors: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("mortar: error:"))
+        .collect();
+    assert_eq!(errors.len(), 1, "{ranks} rank(s): {stderr}");
+    (errors[0].to_string(), out_dir)
+}
+
 /// A box held only along z on one face can translate in x and y and rotate about z: the
 /// singular tangent is detected and reported, on 1 and 2 ranks, instead of "converging" to an
 /// arbitrary rigid shift: by MUMPS's null pivots on the direct solve, and on the iterative path
@@ -38,22 +53,53 @@ fn an_under_constrained_body_is_reported() {
         let text = format!("{toml}\n[newton]\nlinear_solver = \"{path}\"\n");
         let case = common::write_case(&format!("under_constrained_{path}"), &text);
         for ranks in [1, 2] {
-            let out_dir = case.parent().unwrap().join(format!("out{ranks}"));
-            let out = common::run_raw(&case, ranks, &out_dir, &["-q"]);
-            assert!(!out.status.success(), "{path}, {ranks} rank(s)");
-            let stderr = String::from_utf8_lossy(&out.stderr);
-            let errors: Vec<&str> = stderr
-                .lines()
-                .filter(|l| l.starts_with("mortar: error:"))
-                .collect();
-            assert_eq!(errors.len(), 1, "{path}, {ranks} rank(s): {stderr}");
-            assert!(errors[0].contains("singular"), "{}", errors[0]);
-            assert!(errors[0].contains(says), "{}", errors[0]);
+            let (error, out_dir) = failed_run(&case, ranks);
+            assert!(error.contains("singular"), "{error}");
+            assert!(error.contains(says), "{error}");
             // The summary says the same (not `message: null`, as if still running).
             let s = common::summary(&out_dir);
             let message = s["message"].as_str().unwrap_or_default();
-            assert_eq!(format!("mortar: error: {message}"), errors[0], "{s}");
+            assert_eq!(format!("mortar: error: {message}"), error, "{s}");
         }
+    }
+}
+
+/// Two blocks pressed together by two opposite pressures, each held only by a symmetry plane
+/// normal to y: neither alone can move without pressing into the other, but the two together
+/// can translate in x and z and rotate about y. On the iterative path both are named (the
+/// direct solve's null pivots name no body), on 1 and 2 ranks.
+#[test]
+fn bodies_free_together_are_reported_on_the_iterative_path() {
+    let mut toml = common::slide_case(2);
+    for (from, to) in [
+        ("[[symmetry]]\nset = \"low.zmin\"\nnormal = \"z\"\n", ""),
+        ("[[symmetry]]\nset = \"low.xmin\"\nnormal = \"x\"\n", ""),
+        (
+            "[[dirichlet]]\nset = \"up.zmax\"\ncomponents = [\"z\"]",
+            "[[pressure]]\nset = \"low.zmin\"\nvalue = 10.0\n\
+             [[pressure]]\nset = \"up.zmax\"\nvalue = 10.0\n[[dirichlet]]\nset = \"up.zmax\"\n\
+             components = [\"z\"]",
+        ),
+    ] {
+        assert!(toml.contains(from), "no `{from}`");
+        toml = toml.replacen(from, to, 1);
+    }
+    // The two displacement tables on up.zmax go: the pressures alone load the blocks.
+    let start = toml.find("[[dirichlet]]").unwrap();
+    let end = toml.find("[[interface]]").unwrap();
+    toml.replace_range(start..end, "");
+    toml = toml.replace(
+        "[steps]",
+        "[newton]\nlinear_solver = \"iterative\"\n[steps]",
+    );
+    let case = common::write_case("free_together", &toml);
+    for ranks in [1, 2] {
+        let (error, _) = failed_run(&case, ranks);
+        assert!(error.contains("singular"), "{error}");
+        assert!(
+            error.contains("bodies 'low', 'up' can move rigidly"),
+            "{error}"
+        );
     }
 }
 

@@ -31,6 +31,9 @@ pub(super) struct Evaluator {
     /// the same on every rank).
     pub pattern_grown: u64,
     pub pattern_seconds: f64,
+    /// Whether the last tangent was assembled whole: false where an element it met was
+    /// inverted and left out (the same on every rank).
+    pub tangent_whole: bool,
 }
 
 impl Evaluator {
@@ -43,6 +46,7 @@ impl Evaluator {
             outside_pattern: 0,
             pattern_grown: 0,
             pattern_seconds: 0.0,
+            tangent_whole: true,
         }
     }
 
@@ -106,7 +110,9 @@ impl Evaluation<'_> {
             assembly::jacobian(self.model, at, &self.cx.dofs, jac)
         })?;
         self.cx.evaluator.borrow_mut().outside_pattern += jac.stored_entries()? - before;
-        Ok(domain_check(&self.cx.world, issue))
+        let verdict = domain_check(&self.cx.world, issue);
+        self.cx.evaluator.borrow_mut().tangent_whole = verdict.is_ok();
+        Ok(verdict)
     }
 
     /// `F(x; t)` at load factor `t`, or `None` where a rank cannot evaluate it (*collective*).
