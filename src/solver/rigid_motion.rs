@@ -79,9 +79,11 @@ pub(super) fn free_bodies(
     let (g, m) = (gram(&jr)?, gram(&r)?);
     let mut free = vec![false; modes.len().div_ceil(6)];
     for v in softest_motions(&g, &m) {
-        // `|J R v| / |R v|` from the products themselves, not from `G`, whose least
-        // eigenvalues the stiffest motions' round-off covers.
-        if norm_of_combination(&jr, &v)? < NULL_RATIO * scale * norm_of_combination(&r, &v)? {
+        // `|J R v|` from the products themselves, not from `G`, whose least eigenvalues the
+        // stiffest motions' round-off covers; `|R v|^2 = v^T M v` (M is well conditioned on
+        // its range).
+        let motion = (v.transpose() * &m * &v)[(0, 0)].sqrt();
+        if norm_of_combination(&jr, &v)? < NULL_RATIO * scale * motion {
             for (b, share) in body_shares(&m, &v).into_iter().enumerate() {
                 free[b] |= share >= BODY_SHARE;
             }
