@@ -423,7 +423,8 @@ pub struct StepsSpec {
     pub stick_predictor: bool,
     /// Mortar contact with Uzawa multipliers: begin each step with one Newton iteration in
     /// which every node pressed at the last converged step is held bilaterally (an opening
-    /// pulls it back), kept when it lowers the residual. Default true. It closes the gaps that
+    /// pulls it back), and a second when the first raised the residual; kept when it lowers
+    /// the residual. Default true. It closes the gaps that
     /// the predictor's linearization opens in a slide, which the penalty law alone would
     /// leave to a creeping line search (docs/performance.md, "The bilateral iteration").
     #[serde(default = "yes")]
