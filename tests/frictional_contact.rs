@@ -212,7 +212,7 @@ fn a_stick_phase_keeps_its_tangential_force() {
     ignore = "release only: cargo test --release --test frictional_contact"
 )]
 fn a_bilateral_iteration_that_raised_the_residual_is_kept_after_a_second() {
-    const STEP: u64 = 8;
+    const LOAD: f64 = 0.625;
     const MAX_NEWTON_ITS: u64 = 16;
     let level = common::scene_dir("refinement").join("hex8_1.toml");
     let text = std::fs::read_to_string(level).unwrap();
@@ -222,27 +222,42 @@ fn a_bilateral_iteration_that_raised_the_residual_is_kept_after_a_second() {
     assert_ne!(twelve, text);
     let case = common::write_case("bilateral_second_iteration", &twelve);
     let (out, printed) = common::run_case(&case, 1, &["-contact_monitor"]);
-    // "    bilateral iteration kept: |F| a -> b -> c"
-    let kept_after_two: Vec<Vec<f64>> = printed
-        .lines()
-        .filter_map(|l| l.trim().strip_prefix("bilateral iteration kept: |F| "))
-        .filter_map(|path| path.split(" -> ").map(|v| v.parse().ok()).collect())
-        .filter(|norms: &Vec<f64>| norms.len() == 3)
+    // The monitor's last "bilateral iteration kept: |F| a -> b -> c" before the progress line
+    // of the converged step at LOAD.
+    let progress = format!("load {LOAD:.6}: ");
+    let mut bilateral = None;
+    let mut of_step = None;
+    for line in printed.lines().map(str::trim) {
+        if let Some(path) = line.strip_prefix("bilateral iteration ") {
+            bilateral = Some(path.to_string());
+        } else if line.starts_with("step ")
+            && line.contains(&progress)
+            && !line.to_lowercase().contains("not converged")
+        {
+            of_step = bilateral.take();
+        }
+    }
+    let path = of_step.unwrap_or_else(|| panic!("no bilateral iteration in the step at {LOAD}"));
+    let norms: Vec<f64> = path
+        .strip_prefix("kept: |F| ")
+        .unwrap_or_else(|| panic!("the step at {LOAD}: bilateral iteration {path}"))
+        .split(" -> ")
+        .map(|v| v.parse().unwrap())
         .collect();
     assert!(
-        kept_after_two.iter().any(|n| n[1] >= n[0] && n[2] < n[0]),
-        "no bilateral iteration kept after a second: {kept_after_two:?}"
+        norms.len() == 3 && norms[1] >= norms[0] && norms[2] < norms[0],
+        "the step at {LOAD}: not kept after a second iteration: {norms:?}"
     );
     let summary = common::summary(&out);
     let step = summary["steps"]
         .as_array()
         .unwrap()
         .iter()
-        .find(|s| s["step"] == STEP && s["converged"] == true)
-        .unwrap_or_else(|| panic!("no converged step {STEP}"));
+        .find(|s| s["converged"] == true && (s["load"].as_f64().unwrap() - LOAD).abs() < 1e-9)
+        .unwrap_or_else(|| panic!("no converged step at load {LOAD}"));
     let its = step["newton_its"].as_u64().unwrap();
     assert!(
         its <= MAX_NEWTON_ITS,
-        "step {STEP}: {its} Newton iterations (at most {MAX_NEWTON_ITS})"
+        "the step at {LOAD}: {its} Newton iterations (at most {MAX_NEWTON_ITS})"
     );
 }

@@ -424,9 +424,9 @@ pub struct StepsSpec {
     /// Mortar contact with Uzawa multipliers: begin each step with one Newton iteration in
     /// which every node pressed at the last converged step is held bilaterally (an opening
     /// pulls it back), and a second when the first raised the residual; kept when it lowers
-    /// the residual. Default true. It closes the gaps that
-    /// the predictor's linearization opens in a slide, which the penalty law alone would
-    /// leave to a creeping line search (docs/performance.md, "The bilateral iteration").
+    /// the residual. Default true. It closes the gaps that the predictor's linearization opens
+    /// in a slide, which the penalty law alone would leave to a creeping line search
+    /// (docs/performance.md, "The bilateral iteration").
     #[serde(default = "yes")]
     pub bilateral_iteration: bool,
     /// What happens when a step's Newton solve does not converge and no cut is left (a failed

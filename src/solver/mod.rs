@@ -23,7 +23,8 @@
 //! which halves the Newton iterations of displacement-driven steps and removes the cuts that a
 //! large prescribed increment otherwise causes. With contact multipliers, the step's first
 //! Newton iteration is the bilateral iteration (`steps.bilateral_iteration`; module docs of
-//! `contact::frictional`), kept when it lowers the residual. After a converged solve, the augmented
+//! `contact::frictional`), two iterations when the first raised the residual, kept when it
+//! lowers the residual. After a converged solve, the augmented
 //! contributions take an Uzawa step, and the step is solved again until they meet their
 //! tolerances (`step`). Those solves stop at `newton.augmented_rtol`; once the tolerances are
 //! met, a last solve meets `newton.rtol` and they are checked again (docs/theory.md section

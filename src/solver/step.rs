@@ -35,6 +35,17 @@ pub(super) enum StepEnd {
     Stopped,
 }
 
+/// What one Newton iteration of the bilateral problem did.
+enum BilateralNewton {
+    /// None: the iterate already met the tolerances.
+    AtTolerance,
+    /// It failed before its update was accepted (a failed linear solve, an inverted element).
+    Failed,
+    /// The law's residual `|F(x; t)|` at its result, `None` where some rank cannot evaluate
+    /// it.
+    Reached(Option<f64>),
+}
+
 /// What a step's solves counted.
 #[derive(Default)]
 struct Counted {
@@ -231,18 +242,26 @@ impl Run<'_> {
         let before = self.residual_norm(t)?;
         let l = &mut self.linear;
         l.x.copy_to(&mut l.x_guess)?;
-        let Some(first) = self.bilateral_newton_iteration(counted, t)? else {
+        // The law's residual after each iteration, `None` after a failed one (which may have
+        // moved the iterate: undone).
+        let mut reached = Vec::with_capacity(2);
+        match self.bilateral_newton_iteration(counted, t)? {
             // The start already met the tolerances: nothing was tried.
-            return Ok(());
-        };
-        let mut reached = vec![first];
-        if matches!((before, first), (Some(b), Some(a)) if a >= b) {
-            // From a start where the predictor opened every pressed node, one Newton
-            // iteration of the bilateral problem may not yet lower the law's residual; its
-            // result, where the nodes press again, is a better start for a second
-            // (docs/theory.md, "Bilateral iteration").
-            if let Some(second) = self.bilateral_newton_iteration(counted, t)? {
-                reached.push(second);
+            BilateralNewton::AtTolerance => return Ok(()),
+            BilateralNewton::Failed => reached.push(None),
+            BilateralNewton::Reached(first) => {
+                reached.push(first);
+                if matches!((before, first), (Some(b), Some(a)) if a >= b) {
+                    // From a start where the predictor opened every pressed node, one Newton
+                    // iteration of the bilateral problem may not yet lower the law's
+                    // residual; its result, where the nodes press again, is a better start
+                    // for a second (docs/theory.md, "Bilateral iteration").
+                    match self.bilateral_newton_iteration(counted, t)? {
+                        BilateralNewton::AtTolerance => {}
+                        BilateralNewton::Failed => reached.push(None),
+                        BilateralNewton::Reached(second) => reached.push(second),
+                    }
+                }
             }
         }
         let after = reached[reached.len() - 1];
@@ -271,15 +290,13 @@ impl Run<'_> {
         Ok(())
     }
 
-    /// One Newton iteration of the bilateral problem from the current iterate: `None` when
-    /// the iterate already met the tolerances (no iteration), else the law's residual
-    /// `|F(x; t)|` at its result (`None` inside where some rank cannot evaluate it:
-    /// *collective*).
+    /// One Newton iteration of the bilateral problem from the current iterate (the iteration
+    /// counts in `counted`).
     fn bilateral_newton_iteration(
         &mut self,
         counted: &mut Counted,
         t: f64,
-    ) -> Result<Option<Option<f64>>> {
+    ) -> Result<BilateralNewton> {
         self.model.set_bilateral(true);
         let max_it = self.linear.snes.set_max_iterations(1)?;
         let solve = self.solve_once();
@@ -287,10 +304,11 @@ impl Run<'_> {
         self.linear.snes.set_max_iterations(max_it)?;
         let solve = solve?;
         counted.add(&solve);
-        if solve.iterations == 0 {
-            return Ok(None);
-        }
-        Ok(Some(self.residual_norm(t)?))
+        Ok(match (solve.iterations, solve.converged) {
+            (0, true) => BilateralNewton::AtTolerance,
+            (0, false) => BilateralNewton::Failed,
+            _ => BilateralNewton::Reached(self.residual_norm(t)?),
+        })
     }
 
     /// `|F(x; t)|` at the current iterate, `None` where some rank cannot evaluate it

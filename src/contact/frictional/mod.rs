@@ -149,9 +149,10 @@
 //! `dp = eps_N d gh` that pulls it back (why: docs/performance.md, "The tension's geometric
 //! terms"). Otherwise the tangent above differentiates whichever normal law the node took.
 //! The solver uses it for one Newton iteration at the start of a step, two when the first
-//! raised the law's residual (`steps.bilateral_iteration`): in a slide, the predictor's linearized gaps miss by more than
-//! the multiplier's reach `lambda_A / eps_N`, every pressed node opens, and from there the
-//! penalty law gives Newton no contact stiffness to close them with (docs/theory.md section 6).
+//! raised the law's residual (`steps.bilateral_iteration`): in a slide, the predictor's
+//! linearized gaps miss by more than the multiplier's reach `lambda_A / eps_N`, every pressed
+//! node opens, and from there the penalty law gives Newton no contact stiffness to close them
+//! with (docs/theory.md section 6).
 //!
 //! # Parallel layout
 //!
