@@ -17,10 +17,10 @@ const REPRODUCIBLE_ON_RANKS: &[&str] = &["-pc_factor_mat_solver_type", "superlu_
 /// The steps between checkpoints that [`full_run`] tries, in order.
 const CHECKPOINT_EVERY: std::ops::RangeInclusive<usize> = 2..=3;
 
-/// A frictional slide (Hex8, mu 0.3) in 5 steps, of which some are cut (newton.max_it = 3)
+/// A frictional slide (Hex8, mu 0.3) in 9 steps, of which some are cut (newton.max_it = 3)
 /// and all augmented (Uzawa), with a checkpoint every `every` steps.
 fn case(name: &str, linear_solver: &str, every: usize) -> PathBuf {
-    let toml = common::slide_case(5)
+    let toml = common::slide_case(9)
         .replace("[3, 2, 1]", "[9, 6, 2]")
         .replace("[2, 2, 1]", "[6, 6, 2]")
         + &format!("[newton]\nmax_it = 3\nlinear_solver = \"{linear_solver}\"\n")
