@@ -510,6 +510,15 @@ pub struct NewtonSpec {
     /// whole run).
     #[serde(default)]
     pub direct_below: Option<usize>,
+    /// Mortar contact: a Newton update that carries nodes open at the iterate deeper than
+    /// `1e-3 h_A` into the other surface is solved again, with those nodes held on the law's
+    /// pressed branch at the iterate, and the second update is taken where its full step leaves
+    /// the smaller residual (with full steps and `bt`; other line searches take the first).
+    /// Default true. An open node has no normal stiffness in the tangent, so the first update
+    /// may drive it through the other body, and a line search then creeps
+    /// (docs/performance.md, "Newton updates that close nodes, solved again").
+    #[serde(default = "yes")]
+    pub hold_closing: bool,
 }
 
 /// The linear solver a case asks for (`newton.linear_solver`).
@@ -532,6 +541,7 @@ impl Default for NewtonSpec {
             max_it: default_max_it(),
             linear_solver: LinearSolverSpec::Auto,
             direct_below: None,
+            hold_closing: true,
         }
     }
 }

@@ -147,6 +147,26 @@ pub struct Augmentation {
     pub violation: String,
 }
 
+/// The nodes a Newton update carries through the other surface, held for its second solve
+/// ([`Contribution::hold_closing`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Closing {
+    /// How many are held.
+    pub held: usize,
+    /// How deep the update carries the deepest of them past closing, over its face size.
+    pub deepest: f64,
+}
+
+impl Closing {
+    /// Both together.
+    pub fn and(self, other: Closing) -> Closing {
+        Closing {
+            held: self.held + other.held,
+            deepest: self.deepest.max(other.deepest),
+        }
+    }
+}
+
 /// A point field of an interface piece, given at its traction nodes (one value set per row).
 #[derive(Clone, Debug)]
 pub struct RowField {
@@ -345,6 +365,17 @@ pub trait Contribution {
         false
     }
 
+    /// Holds on the law's pressed branch the nodes of this rank that the last tangent found
+    /// open and that a Newton update carries through the other surface to `to` (mortar contact,
+    /// `newton.hold_closing`), for the update to be solved again; until
+    /// [`Contribution::release_closing`].
+    fn hold_closing(&self, _to: &State) -> Closing {
+        Closing::default()
+    }
+
+    /// Lets go of what [`Contribution::hold_closing`] held.
+    fn release_closing(&self) {}
+
     /// Lines on the last Newton iteration's state of this contribution, for the
     /// `-contact_monitor` option (*collective*; only rank 0's are printed).
     fn iteration_report(&self, _world: &SimpleCommunicator) -> Vec<String> {
@@ -442,6 +473,19 @@ impl Model {
     /// Whether some contribution has a node the bilateral iteration binds on this rank.
     pub fn has_bilateral_nodes(&self) -> bool {
         self.parts.iter().any(|c| c.has_bilateral_nodes())
+    }
+
+    /// [`Contribution::hold_closing`] of every contribution, on this rank.
+    pub fn hold_closing(&self, to: &State) -> Closing {
+        self.parts
+            .iter()
+            .map(|c| c.hold_closing(to))
+            .fold(Closing::default(), Closing::and)
+    }
+
+    /// [`Contribution::release_closing`] of every contribution.
+    pub fn release_closing(&self) {
+        self.parts.iter().for_each(|c| c.release_closing());
     }
 
     /// One Uzawa step of every contribution (*collective*): updated if any updated, else

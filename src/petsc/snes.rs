@@ -68,6 +68,9 @@ pub struct SnesOutcome {
     /// shortening of an update is not the line search's and does not count). Read by the
     /// default convergence test only: false when `-snes_convergence_test` replaces it.
     pub shortened: bool,
+    /// Newton updates replaced by their [`SecondSolve`] (whose linear iterations
+    /// `linear_iterations` counts, kept or not).
+    pub second_solves_kept: usize,
 }
 
 /// Newton settings that a scene sets; `-snes_*` options override them.
@@ -154,6 +157,22 @@ type JacobianFn<'a> = dyn FnMut(&Vector, &mut Matrix) -> Result<(), CallbackErro
 /// `limit(x, y)`: the fraction (at most 1, above 0 for a finite update) of the Newton update
 /// `-y` from `x` to take.
 pub type StepLimitFn<'a> = dyn FnMut(&Vector, &Vector) -> Result<f64, CallbackError> + 'a;
+/// `ask(x, y)`: whether the caller changed its residual's law at `x` for the Newton update `-y`
+/// to be solved again there ([`SecondSolve`]).
+pub type SecondSolveFn<'a> = dyn FnMut(&Vector, &Vector) -> Result<bool, CallbackError> + 'a;
+/// `done()`: the second solve is over; puts the law back as it was before `ask`.
+pub type SecondSolveDoneFn<'a> = dyn FnMut() + 'a;
+
+/// A Newton update solved a second time (a pre-check of the line search, before
+/// [`StepLimitFn`]): where `ask` says so, the tangent and residual at `x` are assembled again
+/// (with the law as `ask` left it) and the update solved with them; after `done`, it replaces
+/// the first where the residual at its full step is the smaller
+/// ([`SnesOutcome::second_solves_kept`]). Only with full steps and `bt`, the line searches
+/// whose first trial is the full step.
+pub struct SecondSolve<'a> {
+    pub ask: &'a mut SecondSolveFn<'a>,
+    pub done: &'a mut SecondSolveDoneFn<'a>,
+}
 
 enum Failure {
     Panic(Box<dyn Any + Send>),
@@ -164,6 +183,10 @@ struct Context<'a> {
     residual: &'a mut ResidualFn<'a>,
     jacobian: &'a mut JacobianFn<'a>,
     step_limit: Option<&'a mut StepLimitFn<'a>>,
+    second_solve: Option<SecondSolve<'a>>,
+    /// The second solves of the solve under way: kept, and their linear iterations.
+    second_solves_kept: usize,
+    second_solve_its: usize,
     /// The solver's [`Multigrid`] during the solve (written back after it).
     multigrid: Multigrid,
     failure: Option<Failure>,
@@ -350,7 +373,7 @@ impl Snes {
         residual: &'a mut ResidualFn<'a>,
         jacobian: &'a mut JacobianFn<'a>,
     ) -> Result<SnesOutcome> {
-        self.solve_limited(x, jac, (residual, jacobian), None)
+        self.solve_limited(x, jac, (residual, jacobian), None, None)
     }
 
     /// [`Snes::solve`], with every Newton update first shortened to the fraction
@@ -362,12 +385,16 @@ impl Snes {
         jac: &mut Matrix,
         (residual, jacobian): (&'a mut ResidualFn<'a>, &'a mut JacobianFn<'a>),
         step_limit: Option<&'a mut StepLimitFn<'a>>,
+        second_solve: Option<SecondSolve<'a>>,
     ) -> Result<SnesOutcome> {
-        let limited = step_limit.is_some();
+        let limited = step_limit.is_some() || second_solve.is_some();
         let mut ctx = Context {
             residual,
             jacobian,
             step_limit,
+            second_solve,
+            second_solves_kept: 0,
+            second_solve_its: 0,
             multigrid: self.multigrid,
             failure: None,
             domain_error: None,
@@ -400,7 +427,7 @@ impl Snes {
         if limited {
             chk!(SNESLineSearchSetPreCheck(
                 ls,
-                Some(step_limit_trampoline),
+                Some(pre_check_trampoline),
                 ctx_ptr
             ))?;
         }
@@ -429,7 +456,10 @@ impl Snes {
             Some(Failure::Error(e)) => return Err(e),
             None => solved?,
         }
-        self.outcome(ctx.domain_error)
+        let mut outcome = self.outcome(ctx.domain_error)?;
+        outcome.linear_iterations += ctx.second_solve_its;
+        outcome.second_solves_kept = ctx.second_solves_kept;
+        Ok(outcome)
     }
 
     /// On the iterative path (unless the user's options say whether GAMG reuses its
@@ -669,6 +699,7 @@ impl Snes {
             residual_history: self.history[..n].to_vec(),
             domain_error,
             shortened: self.cycling.shortened,
+            second_solves_kept: 0,
         })
     }
 }
@@ -831,8 +862,9 @@ fn field_preconditioners(pc: p::PC) -> Result<Vec<p::PC>> {
     pcs
 }
 
-unsafe extern "C" fn step_limit_trampoline(
-    _ls: p::SNESLineSearch,
+/// The line search's pre-check: the [`SecondSolve`], then the [`StepLimitFn`].
+unsafe extern "C" fn pre_check_trampoline(
+    ls: p::SNESLineSearch,
     x: p::Vec,
     y: p::Vec,
     changed: *mut p::PetscBool,
@@ -842,6 +874,13 @@ unsafe extern "C" fn step_limit_trampoline(
         ctx,
         || {},
         |c| {
+            if c.second_solve.is_some() && starts_from_full_step(ls)? {
+                let xv = Vector::from_borrowed(x)?;
+                let yv = Vector::from_borrowed(y)?;
+                if second_solve(ls, c, &xv, &yv)? {
+                    *changed = p::PetscBool::PETSC_TRUE;
+                }
+            }
             let Some(limit) = c.step_limit.as_mut() else {
                 return Ok(());
             };
@@ -855,6 +894,109 @@ unsafe extern "C" fn step_limit_trampoline(
             Ok(())
         },
     )
+}
+
+/// Whether the line search `ls` starts from the full Newton step (full steps, `bt`): the
+/// ones whose first trial judges a [`SecondSolve`].
+///
+/// # Safety
+/// `ls` is a valid line search.
+unsafe fn starts_from_full_step(ls: p::SNESLineSearch) -> Result<bool> {
+    let mut name: p::SNESLineSearchType = std::ptr::null();
+    chk!(SNESLineSearchGetType(ls, &mut name))?;
+    // SAFETY: PETSc returns its static type name, or null.
+    Ok(matches!(type_name(name).as_str(), "basic" | "bt"))
+}
+
+/// The [`SecondSolve`] of the update `y` at `x`, where its `ask` wants one; true when the
+/// second update replaced `y`.
+///
+/// # Safety
+/// `ls` is the line search whose vectors `x` and `y` are, valid for this call.
+unsafe fn second_solve(
+    ls: p::SNESLineSearch,
+    c: &mut Context,
+    x: &Vector,
+    y: &Vector,
+) -> Result<bool, CallbackError> {
+    let Some(second) = c.second_solve.as_mut() else {
+        return Ok(false);
+    };
+    if !(second.ask)(x, y)? {
+        return Ok(false);
+    }
+    let mut first = y.duplicate()?;
+    y.copy_to(&mut first)?;
+    let mut update = Vector::from_borrowed(y.raw)?;
+    let solved = solve_again(ls, c, x, &mut update);
+    // The law as it was, before the two updates are judged by it.
+    if let Some(second) = c.second_solve.as_mut() {
+        (second.done)();
+    }
+    // (The second update's residual last: the contact keeps its last evaluation, which the
+    // line search's first trial then reuses when the second is kept.)
+    let kept = solved? && {
+        let before = full_step_norm(c, x, &first)?;
+        full_step_norm(c, x, &update)? < before
+    };
+    if kept {
+        c.second_solves_kept += 1;
+    } else {
+        first.copy_to(&mut update)?;
+    }
+    Ok(kept)
+}
+
+/// The update `y` at `x` solved again, with the tangent and residual assembled anew at `x`;
+/// false where the linear solve failed (`y` is then undefined).
+///
+/// # Safety
+/// `ls` is the line search whose vectors `x` and `y` are, valid for this call.
+unsafe fn solve_again(
+    ls: p::SNESLineSearch,
+    c: &mut Context,
+    x: &Vector,
+    y: &mut Vector,
+) -> Result<bool, CallbackError> {
+    let mut snes: p::SNES = std::ptr::null_mut();
+    chk!(SNESLineSearchGetSNES(ls, &mut snes))?;
+    let (mut amat, mut pmat): (p::Mat, p::Mat) = (std::ptr::null_mut(), std::ptr::null_mut());
+    chk!(SNESGetJacobian(
+        snes,
+        &mut amat,
+        &mut pmat,
+        std::ptr::null_mut(),
+        std::ptr::null_mut()
+    ))?;
+    let mut jm = Matrix::from_borrowed(pmat)?;
+    (c.jacobian)(x, &mut jm)?;
+    // The multigrid set up for this Newton iteration serves the second solve too.
+    if c.multigrid != Multigrid::AsTheOptionsSay {
+        set_multigrid_reuse(snes, true)?;
+    }
+    let mut f = x.duplicate()?;
+    (c.residual)(x, &mut f)?;
+    let ksp = ksp_of(snes)?;
+    chk!(KSPSolve(ksp, f.raw, y.raw))?;
+    let mut reason = p::KSPConvergedReason(0);
+    chk!(KSPGetConvergedReason(ksp, &mut reason))?;
+    let mut its: PetscInt = 0;
+    chk!(KSPGetIterationNumber(ksp, &mut its))?;
+    c.second_solve_its += its.max(0) as usize;
+    Ok(reason.0 >= 0)
+}
+
+/// `|F(x - y)|`, infinite where the residual cannot be evaluated there.
+fn full_step_norm(c: &mut Context, x: &Vector, y: &Vector) -> Result<f64, CallbackError> {
+    let mut w = x.duplicate()?;
+    x.copy_to(&mut w)?;
+    w.axpy(-1.0, y)?;
+    let mut f = x.duplicate()?;
+    match (c.residual)(&w, &mut f) {
+        Ok(()) => Ok(f.norm2()?),
+        Err(CallbackError::Domain(_)) => Ok(f64::INFINITY),
+        Err(e) => Err(e),
+    }
 }
 
 /// The field split `pc` is (of type `pc_type`), or the first one among its parts when it is a

@@ -4,14 +4,16 @@
 
 use std::time::Instant;
 
+use mpi::collective::{CommunicatorCollectives, SystemOperation};
+
 use crate::case::Scene;
 use crate::dofs::DofMap;
 use crate::error::Result;
-use crate::model::{DomainIssue, Model, State};
+use crate::model::{Closing, DomainIssue, Model, State};
 use crate::petsc::{CallbackError, Matrix, Scatter, Vector};
 
 use super::assembly;
-use super::collective::domain_check;
+use super::collective::{domain_check, sum_over_ranks};
 use super::Context;
 
 /// The displacements of the state being evaluated, and the time spent assembling.
@@ -113,6 +115,30 @@ impl Evaluation<'_> {
         let verdict = domain_check(&self.cx.world, issue);
         self.cx.evaluator.borrow_mut().tangent_whole = verdict.is_ok();
         Ok(verdict)
+    }
+
+    /// Holds the contact nodes that the Newton update `-y` from `x` carries through the other
+    /// surface ([`Model::hold_closing`]): how many over every rank, and the deepest; none held
+    /// when that is none (*collective*).
+    pub fn hold_closing(&self, x: &Vector, y: &Vector) -> Result<Closing> {
+        let mut ev = self.cx.evaluator.borrow_mut();
+        ev.load(self.cx.scene, &self.cx.dofs, x)?;
+        let du = ev.update_of(&self.cx.dofs, y)?;
+        let to: Vec<f64> = ev.u.iter().zip(&du).map(|(u, d)| u + d).collect();
+        let at = State {
+            scene: self.cx.scene,
+            u: &to,
+            t: ev.t,
+        };
+        let here = self.model.hold_closing(&at);
+        let world = &self.cx.world;
+        let held = sum_over_ranks(world, here.held as u64) as usize;
+        if held == 0 {
+            self.model.release_closing();
+        }
+        let mut deepest = here.deepest;
+        world.all_reduce_into(&here.deepest, &mut deepest, SystemOperation::max());
+        Ok(Closing { held, deepest })
     }
 
     /// `F(x; t)` at load factor `t`, or `None` where a rank cannot evaluate it (*collective*).

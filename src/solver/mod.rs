@@ -24,7 +24,10 @@
 //! large prescribed increment otherwise causes. With contact multipliers, the step's first
 //! Newton iteration is the bilateral iteration (`steps.bilateral_iteration`; module docs of
 //! `contact::frictional`), two iterations when the first raised the residual, kept when it
-//! lowers the residual. After a converged solve, the augmented
+//! lowers the residual. A Newton update that carries contact nodes open at the iterate through
+//! the other surface is solved again with them held pressed (`newton.hold_closing`; a
+//! pre-check of SNES's line search, `petsc::SecondSolve`), and taken where its full step leaves
+//! the smaller residual. After a converged solve, the augmented
 //! contributions take an Uzawa step, and the step is solved again until they meet their
 //! tolerances (`step`). Those solves stop at `newton.augmented_rtol`; once the tolerances are
 //! met, a last solve meets `newton.rtol` and they are checked again (docs/theory.md section

@@ -2,6 +2,7 @@
 //! predictor, full steps, the fallback line search), the Uzawa loop, and then either the step's
 //! outputs or a cut (module docs of [`super`]).
 
+use std::cell::Cell;
 use std::time::Instant;
 
 use mpi::collective::{CommunicatorCollectives, SystemOperation};
@@ -10,7 +11,9 @@ use crate::error::{print_warning, Error, Result};
 use crate::interrupt;
 use crate::io::output::StepRecord;
 use crate::model::Augmented;
-use crate::petsc::{CallbackError, SnesOutcome, StepLimitFn, Vector};
+use crate::petsc::{
+    CallbackError, SecondSolve, SecondSolveDoneFn, SecondSolveFn, SnesOutcome, StepLimitFn, Vector,
+};
 
 use super::assembly;
 use super::collective::{any_rank, sum_over_ranks};
@@ -61,6 +64,8 @@ struct Counted {
     outside_pattern: u64,
     /// Newton iterates at which the matrix pattern grew (`hold_iterate`).
     pattern_grown: u64,
+    /// Newton updates replaced by their second solve (`newton.hold_closing`).
+    second_solves: usize,
 }
 
 impl Counted {
@@ -68,6 +73,7 @@ impl Counted {
     fn add(&mut self, solve: &SnesOutcome) {
         self.newton += solve.iterations;
         self.linear += solve.linear_iterations;
+        self.second_solves += solve.second_solves_kept;
     }
 }
 
@@ -421,8 +427,10 @@ impl Run<'_> {
         };
         let assembly_stage = self.phases.stage("assembly");
         let (world, stop) = (&self.cx.world, &self.state.stop);
+        // A second solve's tangent is of the held law: not reported.
+        let resolving = Cell::new(false);
         let report = |verdict: Verdict| {
-            if self.contact_monitor && verdict.is_ok() {
+            if self.contact_monitor && verdict.is_ok() && !resolving.get() {
                 let lines = self.model.iteration_report(world);
                 if self.cx.rank == 0 {
                     lines.iter().for_each(|l| println!("{l}"));
@@ -471,12 +479,38 @@ impl Run<'_> {
             .model
             .pattern_moves()
             .then_some(&mut step_limit as &mut StepLimitFn);
+        // Mortar contact: an update that carries open nodes through the other surface is
+        // solved again with them held pressed (`newton.hold_closing`).
+        let mut ask = |x: &Vector, y: &Vector| -> Result<bool, CallbackError> {
+            let closing = ev.hold_closing(x, y)?;
+            if closing.held == 0 {
+                return Ok(false);
+            }
+            if monitor && cx.rank == 0 {
+                let (held, deepest) = (closing.held, closing.deepest);
+                println!(
+                    "    Newton update solved again: {held} nodes it carries {deepest:.2e} h past \
+                     closing held pressed"
+                );
+            }
+            resolving.set(true);
+            Ok(true)
+        };
+        let mut done = || {
+            model.release_closing();
+            resolving.set(false);
+        };
+        let second_solve =
+            (cx.scene.newton.hold_closing && model.pattern_moves()).then_some(SecondSolve {
+                ask: &mut ask as &mut SecondSolveFn,
+                done: &mut done as &mut SecondSolveDoneFn,
+            });
         let (snes, x, jac) = (
             &mut self.linear.snes,
             &mut self.linear.x,
             &mut self.linear.jac,
         );
-        snes.solve_limited(x, jac, (&mut residual, &mut jacobian), limit)
+        snes.solve_limited(x, jac, (&mut residual, &mut jacobian), limit, second_solve)
     }
 
     /// After a converged solve: one Uzawa step of the augmented contributions. Returns true
@@ -768,6 +802,11 @@ impl Run<'_> {
             _ => String::new(),
         };
         let pattern = pattern_note(&solved.counted);
+        let second = match solved.counted.second_solves {
+            0 => String::new(),
+            1 => ", 1 Newton update solved again".to_string(),
+            n => format!(", {n} Newton updates solved again"),
+        };
         let bilateral = match solved.counted.bilateral {
             Some(true) => ", bilateral",
             Some(false) => ", bilateral undone",
@@ -775,7 +814,7 @@ impl Run<'_> {
         };
         self.say(format!(
             "  step {step} load {load:.6}: {} Newton its{uzawa}, |F| {residual:.3e}{floor}, {} \
-             linear its{bilateral}{led}{}{pattern}, {:.2} s",
+             linear its{bilateral}{second}{led}{}{pattern}, {:.2} s",
             solved.counted.newton,
             solved.counted.linear,
             retries_note(

@@ -476,7 +476,7 @@ impl ContactPass {
         let gh = dot(nu, kin.gap) / kin.area;
         let coverage = coverage_scale(kin.area, full.value);
         let prm = self.law_params(st, ctx.iface_mu, ctx.scale, coverage.unwrap_or(1.0));
-        let (p, dp_dgh) = if ctx.modes.bilateral && st.history.lambda_n > 0.0 {
+        let (p, dp_dgh) = if self.held_pressed(ctx.modes, a) {
             bilateral_pressure(st.history.lambda_n, prm.eps_n, gh)
         } else {
             normal_pressure_touching(st.history.lambda_n, prm.eps_n, gh, TOUCH_TOLERANCE * st.h)
@@ -489,6 +489,14 @@ impl ContactPass {
             p,
             dp_dgh,
         })
+    }
+
+    /// Whether the law holds node `a` on its pressed branch whatever its gap
+    /// ([`bilateral_pressure`]): the bilateral iteration's nodes with a multiplier, and those a
+    /// Newton update is solved again with (`ContactInterfaces::hold_closing`).
+    pub(crate) fn held_pressed(&self, modes: LawModes, a: usize) -> bool {
+        (modes.bilateral && self.state[a].history.lambda_n > 0.0)
+            || self.closing_held.borrow().contains(&a)
     }
 
     /// The secondary faces (ascending) carrying a node of `kinematics` (held nodes and their

@@ -154,6 +154,13 @@
 //! node opens, and from there the penalty law gives Newton no contact stiffness to close them
 //! with (docs/theory.md section 6).
 //!
+//! # Nodes a Newton update closes
+//!
+//! `predicted` finds the nodes that were open at the last tangent and that a Newton update
+//! carries deeper than `CLOSING_DEPTH` `h_A` into the other surface, and holds them on the
+//! bilateral law above while the solver solves for the update again (`newton.hold_closing`):
+//! the second update's linear model knows they press once closed (docs/theory.md section 6).
+//!
 //! # Parallel layout
 //!
 //! The mesh is replicated and every rank gathers the displacements of every contact surface
@@ -224,6 +231,7 @@ mod lifecycle;
 mod metrics;
 mod pass;
 mod pattern;
+mod predicted;
 mod reach;
 mod relaxation;
 mod tangent;
@@ -240,8 +248,8 @@ use crate::contact::mortar::{PalletSplit, RejectStats, TractionScheme};
 use crate::dofs::DofMap;
 use crate::error::Result;
 use crate::model::{
-    Augmentation, Contribution, DomainIssue, ForceSink, Output, State, StateSink, StateSource,
-    TangentSink,
+    Augmentation, Closing, Contribution, DomainIssue, ForceSink, Output, State, StateSink,
+    StateSource, TangentSink,
 };
 use crate::petsc::log::Section;
 
@@ -565,6 +573,14 @@ impl Contribution for ContactInterfaces {
             bilateral: on,
             ..self.modes.get()
         });
+    }
+
+    fn hold_closing(&self, to: &State) -> Closing {
+        ContactInterfaces::hold_closing(self, to)
+    }
+
+    fn release_closing(&self) {
+        ContactInterfaces::release_closing(self)
     }
 
     fn has_bilateral_nodes(&self) -> bool {

@@ -85,6 +85,10 @@ pub struct ContactPass {
     /// (mortar; recorded as the pattern's stencils are handed out: the `frictional` module
     /// docs, "Matrix pattern").
     pub(crate) held_pairs: RefCell<Vec<Vec<usize>>>,
+    /// Traction nodes held pressed while a Newton update is solved again
+    /// (`ContactInterfaces::hold_closing`): open at the iterate, carried through the other
+    /// surface by the first update.
+    pub(crate) closing_held: RefCell<std::collections::BTreeSet<usize>>,
 }
 
 /// A face's type and global nodes.
@@ -153,6 +157,7 @@ impl ContactPass {
             last_values: RefCell::new(None),
             state_log: RefCell::new(StateLog::default()),
             held_pairs: RefCell::new(Vec::new()),
+            closing_held: RefCell::new(Default::default()),
         };
         pass.deal(&mesh.coords);
         Ok(pass)

@@ -4,6 +4,7 @@
 use super::coverage::traction_integrals;
 use super::deal::{deal_in_strips, node_work, pass_ranks};
 use super::evaluate::Linearize;
+use super::predicted::CLOSING_DEPTH;
 use super::{coverage_fade, ContactInterfaces, FADE_COVERAGE, MIN_COVERAGE, PENETRATION_REACH};
 use crate::case::Scene;
 use crate::contact::mortar::RejectStats;
@@ -368,6 +369,71 @@ fn the_bilateral_iteration_presses_only_nodes_with_a_multiplier() {
     assert_eq!(bilateral, column_faces);
     contact.set_bilateral(false);
     assert!(pressed(&contact).is_empty(), "pressed by the law");
+}
+
+/// The nodes a Newton update carries through the other surface (`newton.hold_closing`).
+/// [`partly_covered_blocks`] lifted 0.02 (every node open; the log of a tangent there says so),
+/// and an update that lowers the upper block so that the surfaces overlap: by less than
+/// [`CLOSING_DEPTH`] `h_A` at every node, no node is held; by more (four times, at the largest
+/// `h_A`), every node covered at least [`MIN_COVERAGE`] (columns x = 0.25 to 1, rows y = 0.25
+/// to 1: sixteen), the deepest at the smallest `h_A`. Held, they are pressed at the lifted
+/// state too (in tension: they have a tangent there); released, the law is the law again.
+#[test]
+fn an_update_that_carries_open_nodes_through_holds_them() {
+    use crate::model::Contribution;
+    let scene = partly_covered_blocks();
+    let mesh = &scene.mesh;
+    let lifted = upper_lifted(&scene);
+    let at = State {
+        scene: &scene,
+        u: &lifted,
+        t: 1.0,
+    };
+    let contact = on_one_rank(&scene);
+    let mut tangent = DenseTangent::default();
+    assert!(contact.jacobian(&at, &mut tangent).unwrap().is_none());
+    assert!(tangent.0.is_empty(), "every node open where lifted");
+    let pass = &contact.interfaces[0].passes[0];
+    let sizes = pass.state.iter().map(|st| st.h);
+    let (h_min, h_max) = sizes.fold((f64::MAX, 0.0f64), |(l, h), v| (l.min(v), h.max(v)));
+    // The surfaces stand 0.01 apart where lifted by 0.02: overlapping by `depth` at 0.01 -
+    // depth, each node by `depth / h_A` of its face size.
+    let hold = |depth: f64| {
+        let u: Vec<f64> = lifted
+            .iter()
+            .map(|&v| if v > 0.0 { 0.01 - depth } else { 0.0 })
+            .collect();
+        contact.hold_closing(&State {
+            scene: &scene,
+            u: &u,
+            t: 1.0,
+        })
+    };
+    assert_eq!(hold(0.5 * CLOSING_DEPTH * h_min).held, 0);
+    contact.release_closing();
+    let closing = hold(4.0 * CLOSING_DEPTH * h_max);
+    let held: BTreeSet<usize> = pass.closing_held.borrow().iter().copied().collect();
+    let expected: BTreeSet<usize> = (0..pass.nodes.len())
+        .filter(|&a| {
+            let [x, y, _] = mesh.coords[pass.nodes[a]];
+            x >= 0.25 && y >= 0.25
+        })
+        .collect();
+    assert_eq!(held, expected);
+    assert_eq!(closing.held, 16);
+    let deepest = 4.0 * CLOSING_DEPTH * h_max / h_min;
+    assert!(
+        (closing.deepest - deepest).abs() < 1e-9 * deepest,
+        "deepest {} against {deepest}",
+        closing.deepest
+    );
+    let mut held_tangent = DenseTangent::default();
+    assert!(contact.jacobian(&at, &mut held_tangent).unwrap().is_none());
+    assert!(!held_tangent.0.is_empty(), "held nodes are pressed");
+    contact.release_closing();
+    let mut released = DenseTangent::default();
+    assert!(contact.jacobian(&at, &mut released).unwrap().is_none());
+    assert!(released.0.is_empty(), "released: open again");
 }
 
 /// A dof-indexed dense copy of the blocks a tangent adds.
