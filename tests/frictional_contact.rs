@@ -270,11 +270,13 @@ fn a_bilateral_iteration_that_raised_the_residual_is_kept_after_a_second() {
 /// family (`cases/refinement/hex8_1.toml`, 8 028 free dofs, 20 steps) two slide steps creep
 /// without it (loads 0.6 and 1.0: 13 Newton iterations each, measured): a full step opens a
 /// few nodes at the contact's edge, the next carries them 2e-2 to 4e-2 `h_A` deep into the
-/// upper block, and `bt` closes them at short step lengths. With it those steps take 7, the
-/// whole run 149 Newton iterations against 163. The two end in the same state to what the
-/// Uzawa tolerance leaves (`uzawa_tol` 1e-6 `h_A`; measured 8.4e-8 of the largest
-/// displacement): their Newton paths stop the loose solves between augmentations at other
-/// points, so the multipliers differ within it. Release only (about 40 s).
+/// upper block, and `bt` closes them at short step lengths. With it those steps take 7 (at
+/// most 9 asserted), the whole run 149 Newton iterations against 163. The two end in the same
+/// state to what the Uzawa tolerance leaves: their Newton paths stop the loose solves between
+/// augmentations at other points, so their multipliers differ within it (penetrations below
+/// `uzawa_tol` 1e-6 `h_A`, about 1.7e-7 of the largest displacement, 0.5, at `h_A` = 1/12; with
+/// every solve tight the state moves by 5.9e-8, docs/performance.md, "The price of each
+/// choice"; measured 8.4e-8 between the two, asserted 1e-6). Release only (about 40 s).
 #[test]
 #[cfg_attr(
     debug_assertions,
@@ -282,7 +284,7 @@ fn a_bilateral_iteration_that_raised_the_residual_is_kept_after_a_second() {
 )]
 fn updates_that_carry_open_nodes_through_are_solved_again() {
     const CREEPING_LOADS: [f64; 2] = [0.6, 1.0];
-    const MAX_NEWTON_ITS: u64 = 8;
+    const MAX_NEWTON_ITS: u64 = 9;
     let level = common::scene_dir("refinement").join("hex8_1.toml");
     let text = std::fs::read_to_string(level).unwrap();
     let on = text.replacen("vtu_every = 5", "vtu_every = 0", 1);

@@ -513,8 +513,8 @@ pub struct NewtonSpec {
     /// Mortar contact: a Newton update that carries nodes open at the iterate deeper than
     /// `1e-3 h_A` into the other surface is solved again, with those nodes held on the law's
     /// pressed branch at the iterate, and the second update is taken where its full step leaves
-    /// the smaller residual (with full steps and `bt`; other line searches take the first).
-    /// Default true. An open node has no normal stiffness in the tangent, so the first update
+    /// the smaller residual (with full steps and `bt`; under other line searches every update
+    /// is solved once). Default true. An open node has no normal stiffness in the tangent, so the first update
     /// may drive it through the other body, and a line search then creeps
     /// (docs/performance.md, "Newton updates that close nodes, solved again").
     #[serde(default = "yes")]

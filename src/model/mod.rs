@@ -365,11 +365,11 @@ pub trait Contribution {
         false
     }
 
-    /// Holds on the law's pressed branch the nodes of this rank that the last tangent found
-    /// open and that a Newton update carries through the other surface to `to` (mortar contact,
+    /// Holds on the law's pressed branch the nodes of this rank that are open at `at` and that
+    /// the Newton update from `at` to `to` carries through the other surface (mortar contact,
     /// `newton.hold_closing`), for the update to be solved again; until
     /// [`Contribution::release_closing`].
-    fn hold_closing(&self, _to: &State) -> Closing {
+    fn hold_closing(&self, _at: &State, _to: &State) -> Closing {
         Closing::default()
     }
 
@@ -476,10 +476,10 @@ impl Model {
     }
 
     /// [`Contribution::hold_closing`] of every contribution, on this rank.
-    pub fn hold_closing(&self, to: &State) -> Closing {
+    pub fn hold_closing(&self, at: &State, to: &State) -> Closing {
         self.parts
             .iter()
-            .map(|c| c.hold_closing(to))
+            .map(|c| c.hold_closing(at, to))
             .fold(Closing::default(), Closing::and)
     }
 

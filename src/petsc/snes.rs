@@ -68,8 +68,9 @@ pub struct SnesOutcome {
     /// shortening of an update is not the line search's and does not count). Read by the
     /// default convergence test only: false when `-snes_convergence_test` replaces it.
     pub shortened: bool,
-    /// Newton updates replaced by their [`SecondSolve`] (whose linear iterations
-    /// `linear_iterations` counts, kept or not).
+    /// Newton updates solved a second time ([`SecondSolve`]; `linear_iterations` counts their
+    /// linear iterations), and those the second update replaced.
+    pub second_solves: usize,
     pub second_solves_kept: usize,
 }
 
@@ -157,21 +158,21 @@ type JacobianFn<'a> = dyn FnMut(&Vector, &mut Matrix) -> Result<(), CallbackErro
 /// `limit(x, y)`: the fraction (at most 1, above 0 for a finite update) of the Newton update
 /// `-y` from `x` to take.
 pub type StepLimitFn<'a> = dyn FnMut(&Vector, &Vector) -> Result<f64, CallbackError> + 'a;
-/// `ask(x, y)`: whether the caller changed its residual's law at `x` for the Newton update `-y`
-/// to be solved again there ([`SecondSolve`]).
-pub type SecondSolveFn<'a> = dyn FnMut(&Vector, &Vector) -> Result<bool, CallbackError> + 'a;
-/// `done()`: the second solve is over; puts the law back as it was before `ask`.
-pub type SecondSolveDoneFn<'a> = dyn FnMut() + 'a;
-
-/// A Newton update solved a second time (a pre-check of the line search, before
-/// [`StepLimitFn`]): where `ask` says so, the tangent and residual at `x` are assembled again
-/// (with the law as `ask` left it) and the update solved with them; after `done`, it replaces
-/// the first where the residual at its full step is the smaller
-/// ([`SnesOutcome::second_solves_kept`]). Only with full steps and `bt`, the line searches
-/// whose first trial is the full step.
-pub struct SecondSolve<'a> {
-    pub ask: &'a mut SecondSolveFn<'a>,
-    pub done: &'a mut SecondSolveDoneFn<'a>,
+/// A Newton update solved a second time, in the line search's pre-check (after the
+/// [`StepLimitFn`]): where [`SecondSolve::ask`] says so, the tangent and residual at `x` are
+/// assembled again (with the law as `ask` left it) and the update solved with them, at the
+/// linear tolerance of the first solve; after [`SecondSolve::release`], the second update (the
+/// step limit applied to it too) replaces the first where the solve's residual at its full
+/// step is the smaller. Only with full steps and `bt`, the line searches whose first trial is
+/// the full step.
+pub trait SecondSolve {
+    /// Whether to solve the update `-y` from `x` again: true once the caller changed its
+    /// residual's law at `x` for the second solve (*collective*: the same on every rank).
+    fn ask(&mut self, x: &Vector, y: &Vector) -> Result<bool, CallbackError>;
+    /// The second solve is over: the law as it was before `ask`.
+    fn release(&mut self);
+    /// Whether the second update replaced the first.
+    fn judged(&mut self, _kept: bool) {}
 }
 
 enum Failure {
@@ -183,8 +184,9 @@ struct Context<'a> {
     residual: &'a mut ResidualFn<'a>,
     jacobian: &'a mut JacobianFn<'a>,
     step_limit: Option<&'a mut StepLimitFn<'a>>,
-    second_solve: Option<SecondSolve<'a>>,
-    /// The second solves of the solve under way: kept, and their linear iterations.
+    second_solve: Option<&'a mut dyn SecondSolve>,
+    /// The second solves of the solve under way: made, kept, and their linear iterations.
+    second_solves: usize,
     second_solves_kept: usize,
     second_solve_its: usize,
     /// The solver's [`Multigrid`] during the solve (written back after it).
@@ -378,14 +380,15 @@ impl Snes {
 
     /// [`Snes::solve`], with every Newton update first shortened to the fraction
     /// `step_limit(x, y)` of it (a pre-check of the line search: `basic` and `bt` take at
-    /// most the shortened update, `l2` searches along it and may go beyond).
+    /// most the shortened update, `l2` searches along it and may go beyond), and solved a
+    /// second time where `second_solve` asks for it.
     pub fn solve_limited<'a>(
         &mut self,
         x: &mut Vector,
         jac: &mut Matrix,
         (residual, jacobian): (&'a mut ResidualFn<'a>, &'a mut JacobianFn<'a>),
         step_limit: Option<&'a mut StepLimitFn<'a>>,
-        second_solve: Option<SecondSolve<'a>>,
+        second_solve: Option<&'a mut dyn SecondSolve>,
     ) -> Result<SnesOutcome> {
         let limited = step_limit.is_some() || second_solve.is_some();
         let mut ctx = Context {
@@ -393,6 +396,7 @@ impl Snes {
             jacobian,
             step_limit,
             second_solve,
+            second_solves: 0,
             second_solves_kept: 0,
             second_solve_its: 0,
             multigrid: self.multigrid,
@@ -458,6 +462,7 @@ impl Snes {
         }
         let mut outcome = self.outcome(ctx.domain_error)?;
         outcome.linear_iterations += ctx.second_solve_its;
+        outcome.second_solves = ctx.second_solves;
         outcome.second_solves_kept = ctx.second_solves_kept;
         Ok(outcome)
     }
@@ -699,6 +704,7 @@ impl Snes {
             residual_history: self.history[..n].to_vec(),
             domain_error,
             shortened: self.cycling.shortened,
+            second_solves: 0,
             second_solves_kept: 0,
         })
     }
@@ -862,7 +868,7 @@ fn field_preconditioners(pc: p::PC) -> Result<Vec<p::PC>> {
     pcs
 }
 
-/// The line search's pre-check: the [`SecondSolve`], then the [`StepLimitFn`].
+/// The line search's pre-check: the [`StepLimitFn`], then the [`SecondSolve`].
 unsafe extern "C" fn pre_check_trampoline(
     ls: p::SNESLineSearch,
     x: p::Vec,
@@ -874,26 +880,30 @@ unsafe extern "C" fn pre_check_trampoline(
         ctx,
         || {},
         |c| {
-            if c.second_solve.is_some() && starts_from_full_step(ls)? {
-                let xv = Vector::from_borrowed(x)?;
-                let yv = Vector::from_borrowed(y)?;
-                if second_solve(ls, c, &xv, &yv)? {
-                    *changed = p::PetscBool::PETSC_TRUE;
-                }
-            }
-            let Some(limit) = c.step_limit.as_mut() else {
-                return Ok(());
-            };
             let xv = Vector::from_borrowed(x)?;
             let mut yv = Vector::from_borrowed(y)?;
-            let fraction = limit(&xv, &yv)?;
-            if fraction < 1.0 {
-                yv.scale(fraction)?;
+            let mut any = limit_update(c, &xv, &mut yv)?;
+            if c.second_solve.is_some() && starts_from_full_step(ls)? {
+                any |= second_solve(ls, c, &xv, &mut yv)?;
+            }
+            if any {
                 *changed = p::PetscBool::PETSC_TRUE;
             }
             Ok(())
         },
     )
+}
+
+/// The update `y` at `x` shortened by the [`StepLimitFn`]; whether it was.
+fn limit_update(c: &mut Context, x: &Vector, y: &mut Vector) -> Result<bool, CallbackError> {
+    let Some(limit) = c.step_limit.as_mut() else {
+        return Ok(false);
+    };
+    let fraction = limit(x, y)?;
+    if fraction < 1.0 {
+        y.scale(fraction)?;
+    }
+    Ok(fraction < 1.0)
 }
 
 /// Whether the line search `ls` starts from the full Newton step (full steps, `bt`): the
@@ -905,7 +915,7 @@ unsafe fn starts_from_full_step(ls: p::SNESLineSearch) -> Result<bool> {
     let mut name: p::SNESLineSearchType = std::ptr::null();
     chk!(SNESLineSearchGetType(ls, &mut name))?;
     // SAFETY: PETSc returns its static type name, or null.
-    Ok(matches!(type_name(name).as_str(), "basic" | "bt"))
+    Ok(matches!(type_name(name).as_str(), "basic" | "none" | "bt"))
 }
 
 /// The [`SecondSolve`] of the update `y` at `x`, where its `ask` wants one; true when the
@@ -917,38 +927,48 @@ unsafe fn second_solve(
     ls: p::SNESLineSearch,
     c: &mut Context,
     x: &Vector,
-    y: &Vector,
+    y: &mut Vector,
 ) -> Result<bool, CallbackError> {
-    let Some(second) = c.second_solve.as_mut() else {
-        return Ok(false);
-    };
-    if !(second.ask)(x, y)? {
-        return Ok(false);
-    }
     let mut first = y.duplicate()?;
     y.copy_to(&mut first)?;
-    let mut update = Vector::from_borrowed(y.raw)?;
-    let solved = solve_again(ls, c, x, &mut update);
-    // The law as it was, before the two updates are judged by it.
-    if let Some(second) = c.second_solve.as_mut() {
-        (second.done)();
+    let Some(second) = c.second_solve.as_deref_mut() else {
+        return Ok(false);
+    };
+    if !second.ask(x, y)? {
+        return Ok(false);
     }
+    c.second_solves += 1;
+    let solved = solve_again(ls, c, x, y);
+    if let Some(second) = c.second_solve.as_deref_mut() {
+        second.release();
+    }
+    // A state the second solve cannot evaluate (or a stop asked for at its Jacobian, which
+    // the next one finds again) leaves the first update.
+    let solved = match solved {
+        Err(CallbackError::Domain(_)) => false,
+        other => other?,
+    };
     // (The second update's residual last: the contact keeps its last evaluation, which the
     // line search's first trial then reuses when the second is kept.)
-    let kept = solved? && {
+    let kept = solved && {
+        limit_update(c, x, y)?;
         let before = full_step_norm(c, x, &first)?;
-        full_step_norm(c, x, &update)? < before
+        full_step_norm(c, x, y)? < before
     };
     if kept {
         c.second_solves_kept += 1;
     } else {
-        first.copy_to(&mut update)?;
+        first.copy_to(y)?;
+    }
+    if let Some(second) = c.second_solve.as_deref_mut() {
+        second.judged(kept);
     }
     Ok(kept)
 }
 
-/// The update `y` at `x` solved again, with the tangent and residual assembled anew at `x`;
-/// false where the linear solve failed (`y` is then undefined).
+/// The update `y` at `x` solved again, with the tangent and residual assembled anew at `x`,
+/// at the linear tolerance of the Newton iteration's first solve; false where the linear
+/// solve failed (`y` is then undefined).
 ///
 /// # Safety
 /// `ls` is the line search whose vectors `x` and `y` are, valid for this call.
@@ -977,13 +997,20 @@ unsafe fn solve_again(
     let mut f = x.duplicate()?;
     (c.residual)(x, &mut f)?;
     let ksp = ksp_of(snes)?;
-    chk!(KSPSolve(ksp, f.raw, y.raw))?;
+    // Eisenstat-Walker's tolerance is the one the first solve took (still the solver's):
+    // computed again here it would see no progress and take its loosest.
+    let mut ew = p::PetscBool::PETSC_FALSE;
+    chk!(SNESKSPGetUseEW(snes, &mut ew))?;
+    chk!(SNESKSPSetUseEW(snes, p::PetscBool::PETSC_FALSE))?;
+    let solved = chk!(KSPSolve(ksp, f.raw, y.raw));
+    chk!(SNESKSPSetUseEW(snes, ew))?;
+    solved?;
     let mut reason = p::KSPConvergedReason(0);
     chk!(KSPGetConvergedReason(ksp, &mut reason))?;
     let mut its: PetscInt = 0;
     chk!(KSPGetIterationNumber(ksp, &mut its))?;
     c.second_solve_its += its.max(0) as usize;
-    Ok(reason.0 >= 0)
+    Ok(reason.0 > 0)
 }
 
 /// `|F(x - y)|`, infinite where the residual cannot be evaluated there.

@@ -125,12 +125,12 @@ impl Evaluation<'_> {
         ev.load(self.cx.scene, &self.cx.dofs, x)?;
         let du = ev.update_of(&self.cx.dofs, y)?;
         let to: Vec<f64> = ev.u.iter().zip(&du).map(|(u, d)| u + d).collect();
-        let at = State {
+        let to = State {
             scene: self.cx.scene,
             u: &to,
             t: ev.t,
         };
-        let here = self.model.hold_closing(&at);
+        let here = self.model.hold_closing(&ev.state(self.cx.scene), &to);
         let world = &self.cx.world;
         let held = sum_over_ranks(world, here.held as u64) as usize;
         if held == 0 {

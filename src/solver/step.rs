@@ -11,9 +11,7 @@ use crate::error::{print_warning, Error, Result};
 use crate::interrupt;
 use crate::io::output::StepRecord;
 use crate::model::Augmented;
-use crate::petsc::{
-    CallbackError, SecondSolve, SecondSolveDoneFn, SecondSolveFn, SnesOutcome, StepLimitFn, Vector,
-};
+use crate::petsc::{CallbackError, SecondSolve, SnesOutcome, StepLimitFn, Vector};
 
 use super::assembly;
 use super::collective::{any_rank, sum_over_ranks};
@@ -64,8 +62,10 @@ struct Counted {
     outside_pattern: u64,
     /// Newton iterates at which the matrix pattern grew (`hold_iterate`).
     pattern_grown: u64,
-    /// Newton updates replaced by their second solve (`newton.hold_closing`).
+    /// Newton updates solved a second time (`newton.hold_closing`), and those the second
+    /// update replaced.
     second_solves: usize,
+    second_solves_kept: usize,
 }
 
 impl Counted {
@@ -73,7 +73,8 @@ impl Counted {
     fn add(&mut self, solve: &SnesOutcome) {
         self.newton += solve.iterations;
         self.linear += solve.linear_iterations;
-        self.second_solves += solve.second_solves_kept;
+        self.second_solves += solve.second_solves;
+        self.second_solves_kept += solve.second_solves_kept;
     }
 }
 
@@ -481,30 +482,13 @@ impl Run<'_> {
             .then_some(&mut step_limit as &mut StepLimitFn);
         // Mortar contact: an update that carries open nodes through the other surface is
         // solved again with them held pressed (`newton.hold_closing`).
-        let mut ask = |x: &Vector, y: &Vector| -> Result<bool, CallbackError> {
-            let closing = ev.hold_closing(x, y)?;
-            if closing.held == 0 {
-                return Ok(false);
-            }
-            if monitor && cx.rank == 0 {
-                let (held, deepest) = (closing.held, closing.deepest);
-                println!(
-                    "    Newton update solved again: {held} nodes it carries {deepest:.2e} h past \
-                     closing held pressed"
-                );
-            }
-            resolving.set(true);
-            Ok(true)
+        let mut hold_closing = HoldClosing {
+            ev,
+            monitor,
+            resolving: &resolving,
         };
-        let mut done = || {
-            model.release_closing();
-            resolving.set(false);
-        };
-        let second_solve =
-            (cx.scene.newton.hold_closing && model.pattern_moves()).then_some(SecondSolve {
-                ask: &mut ask as &mut SecondSolveFn,
-                done: &mut done as &mut SecondSolveDoneFn,
-            });
+        let second_solve = (cx.scene.newton.hold_closing && model.pattern_moves())
+            .then_some(&mut hold_closing as &mut dyn SecondSolve);
         let (snes, x, jac) = (
             &mut self.linear.snes,
             &mut self.linear.x,
@@ -802,10 +786,13 @@ impl Run<'_> {
             _ => String::new(),
         };
         let pattern = pattern_note(&solved.counted);
-        let second = match solved.counted.second_solves {
-            0 => String::new(),
-            1 => ", 1 Newton update solved again".to_string(),
-            n => format!(", {n} Newton updates solved again"),
+        let second = match (
+            solved.counted.second_solves,
+            solved.counted.second_solves_kept,
+        ) {
+            (0, _) => String::new(),
+            (1, kept) => format!(", 1 Newton update solved again ({kept} kept)"),
+            (n, kept) => format!(", {n} Newton updates solved again ({kept} kept)"),
         };
         let bilateral = match solved.counted.bilateral {
             Some(true) => ", bilateral",
@@ -824,6 +811,55 @@ impl Run<'_> {
             ),
             seconds.total
         ));
+    }
+}
+
+/// The second solve of a Newton update that carries contact nodes open at the iterate through
+/// the other surface (`newton.hold_closing`; `contact::frictional`, "Nodes a Newton update
+/// closes"): those nodes held pressed for it.
+struct HoldClosing<'a> {
+    ev: Evaluation<'a>,
+    monitor: bool,
+    /// Set while the law holds them: the second solve's tangent is not reported.
+    resolving: &'a Cell<bool>,
+}
+
+impl SecondSolve for HoldClosing<'_> {
+    fn ask(&mut self, x: &Vector, y: &Vector) -> Result<bool, CallbackError> {
+        let closing = self.ev.hold_closing(x, y)?;
+        if closing.held == 0 {
+            return Ok(false);
+        }
+        self.say(format_args!(
+            "Newton update solved again, {} nodes held pressed (deepest {:.2e} h past closing)",
+            closing.held, closing.deepest
+        ));
+        self.resolving.set(true);
+        Ok(true)
+    }
+
+    fn release(&mut self) {
+        self.ev.model.release_closing();
+        self.resolving.set(false);
+    }
+
+    fn judged(&mut self, kept: bool) {
+        self.say(format_args!(
+            "{}",
+            match kept {
+                true => "second update kept",
+                false => "first update kept (the second's full step leaves the larger residual)",
+            }
+        ));
+    }
+}
+
+impl HoldClosing<'_> {
+    /// A `-contact_monitor` line, on rank 0.
+    fn say(&self, line: std::fmt::Arguments) {
+        if self.monitor && self.ev.cx.rank == 0 {
+            println!("    {line}");
+        }
     }
 }
 

@@ -115,6 +115,7 @@ pub(super) fn not_started(signal: i32) -> SnesOutcome {
         residual_history: Vec::new(),
         domain_error: Some(format!("interrupted by {}", interrupt::name(signal))),
         shortened: false,
+        second_solves: 0,
         second_solves_kept: 0,
     }
 }

@@ -109,11 +109,6 @@ impl StateLog {
         self.pressed = pressed;
     }
 
-    /// The state code of node `a` at the last tangent evaluation (0, open, if never recorded).
-    pub(crate) fn state_of(&self, a: usize) -> u8 {
-        self.states.get(a).copied().unwrap_or(0)
-    }
-
     /// The states of the last tangent evaluation, then the pressed counts (a checkpoint).
     pub(crate) fn to_codes(&self) -> Vec<u64> {
         let mut codes: Vec<u64> = self.states.iter().map(|&c| u64::from(c)).collect();

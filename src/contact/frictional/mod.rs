@@ -156,10 +156,11 @@
 //!
 //! # Nodes a Newton update closes
 //!
-//! `predicted` finds the nodes that were open at the last tangent and that a Newton update
-//! carries deeper than `CLOSING_DEPTH` `h_A` into the other surface, and holds them on the
-//! bilateral law above while the solver solves for the update again (`newton.hold_closing`):
-//! the second update's linear model knows they press once closed (docs/theory.md section 6).
+//! `closing` finds the nodes that the law leaves open at a Newton iterate and that the Newton
+//! update carries deeper than `CLOSING_DEPTH` `h_A` into the other surface, and holds them on
+//! the bilateral law above while the solver solves for the update again
+//! (`newton.hold_closing`): the second update's linear model knows they press once closed
+//! (docs/theory.md section 6).
 //!
 //! # Parallel layout
 //!
@@ -223,6 +224,7 @@
 
 mod carried;
 mod changes;
+mod closing;
 mod coverage;
 mod deal;
 mod evaluate;
@@ -231,7 +233,6 @@ mod lifecycle;
 mod metrics;
 mod pass;
 mod pattern;
-mod predicted;
 mod reach;
 mod relaxation;
 mod tangent;
@@ -575,8 +576,8 @@ impl Contribution for ContactInterfaces {
         });
     }
 
-    fn hold_closing(&self, to: &State) -> Closing {
-        ContactInterfaces::hold_closing(self, to)
+    fn hold_closing(&self, at: &State, to: &State) -> Closing {
+        ContactInterfaces::hold_closing(self, at, to)
     }
 
     fn release_closing(&self) {

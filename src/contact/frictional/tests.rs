@@ -1,10 +1,10 @@
 //! Unit tests of the contact interfaces: Uzawa on partly covered nodes, the pressed faces of
 //! a tangent, the coverage fade, the traction integrals, and the dealing of work to ranks.
 
+use super::closing::CLOSING_DEPTH;
 use super::coverage::traction_integrals;
 use super::deal::{deal_in_strips, node_work, pass_ranks};
 use super::evaluate::Linearize;
-use super::predicted::CLOSING_DEPTH;
 use super::{coverage_fade, ContactInterfaces, FADE_COVERAGE, MIN_COVERAGE, PENETRATION_REACH};
 use crate::case::Scene;
 use crate::contact::mortar::RejectStats;
@@ -372,9 +372,9 @@ fn the_bilateral_iteration_presses_only_nodes_with_a_multiplier() {
 }
 
 /// The nodes a Newton update carries through the other surface (`newton.hold_closing`).
-/// [`partly_covered_blocks`] lifted 0.02 (every node open; the log of a tangent there says so),
-/// and an update that lowers the upper block so that the surfaces overlap: by less than
-/// [`CLOSING_DEPTH`] `h_A` at every node, no node is held; by more (four times, at the largest
+/// [`partly_covered_blocks`] lifted 0.02 (every node open: no tangent there), and an update
+/// that lowers the upper block so that the surfaces overlap: by less than [`CLOSING_DEPTH`]
+/// `h_A` at every node, no node is held; by more (four times, at the largest
 /// `h_A`), every node covered at least [`MIN_COVERAGE`] (columns x = 0.25 to 1, rows y = 0.25
 /// to 1: sixteen), the deepest at the smallest `h_A`. Held, they are pressed at the lifted
 /// state too (in tension: they have a tangent there); released, the law is the law again.
@@ -403,11 +403,12 @@ fn an_update_that_carries_open_nodes_through_holds_them() {
             .iter()
             .map(|&v| if v > 0.0 { 0.01 - depth } else { 0.0 })
             .collect();
-        contact.hold_closing(&State {
+        let to = State {
             scene: &scene,
             u: &u,
             t: 1.0,
-        })
+        };
+        contact.hold_closing(&at, &to)
     };
     assert_eq!(hold(0.5 * CLOSING_DEPTH * h_min).held, 0);
     contact.release_closing();

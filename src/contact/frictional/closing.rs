@@ -9,56 +9,55 @@
 //! bilateral iteration holds its nodes), and the solver solves for the update again: the
 //! linear model of a held node is that of the pressed side of the law's kink, so the second
 //! update closes it onto the other surface instead of through it. The solver keeps the second
-//! update only where its full step leaves the smaller residual of the law itself (the held
-//! law is a direction's model, never a residual Newton converges to).
+//! update only where its full step leaves the smaller residual of the solve (the held law is a
+//! direction's model, never a residual Newton converges to).
 //!
 //! A node counts as carried through when the law presses it at the update's end deeper than
 //! [`CLOSING_DEPTH`] `h_A` past the gap at which it closes, `p / (eps_N h_A) > CLOSING_DEPTH`:
 //! updates that close nodes by less, which are common in steps that converge quadratically
 //! (the overshoot is what closes them), keep their one solve.
 
+use std::collections::BTreeSet;
+
 use crate::case::ContactMethod;
 use crate::contact::mortar::RejectStats;
 use crate::model::{Closing, State};
 
-use super::ContactInterfaces;
+use super::evaluate::NormalLaw;
+use super::pass::ContactPass;
+use super::{ContactInterface, ContactInterfaces};
 
 /// How far past closing (in units of the node's face size `h_A`) an update must carry an open
 /// node for [`ContactInterfaces::hold_closing`] to hold it (docs/performance.md, "Newton
 /// updates that close nodes, solved again": the creeping steps' updates carry nodes 1e-2 to
-/// 4e-2 `h_A` deep, the others' mostly below 1e-3).
+/// 4e-2 `h_A` deep, most others' less than 1e-3).
 pub(crate) const CLOSING_DEPTH: f64 = 1e-3;
 
 impl ContactInterfaces {
-    /// Holds pressed every mortar traction node of this rank that the last tangent evaluation
-    /// found open and that the law presses at `to` (where the Newton update leads) deeper than
-    /// [`CLOSING_DEPTH`]; held until [`Self::release_closing`]. Nodes the law holds already
-    /// (the bilateral iteration's) are left as they are.
-    pub(crate) fn hold_closing(&self, to: &State) -> Closing {
-        let x = to.positions();
+    /// Holds pressed every mortar traction node of this rank that the law leaves open at `at`
+    /// (no normal stiffness: neither pressed nor touching; not held already, as the bilateral
+    /// iteration's nodes are) and presses at `to`, where the Newton update leads, deeper than
+    /// [`CLOSING_DEPTH`]; held until [`Self::release_closing`].
+    pub(crate) fn hold_closing(&self, at: &State, to: &State) -> Closing {
+        let (x_at, x_to) = (at.positions(), to.positions());
         let mut closing = Closing::default();
         for iface in &self.interfaces {
             let worked = iface.passes.iter().filter(|p| !p.held.is_empty());
             for pass in worked.filter(|p| p.method == ContactMethod::Mortar) {
-                let ctx = iface.context(self.modes.get(), &x, &self.x_old);
-                let Ok(normals) = pass.normals(ctx.x) else {
+                let modes = self.modes.get();
+                let open: BTreeSet<usize> = self
+                    .laws(iface, pass, &x_at)
+                    .into_iter()
+                    .filter(|(a, law)| law.dp_dgh == 0.0 && !pass.held_pressed(modes, *a))
+                    .map(|(a, _)| a)
+                    .collect();
+                if open.is_empty() {
                     continue;
-                };
-                let mut stats = RejectStats::default();
-                let values = pass.values_at(&ctx, Some(&self.timings), &mut stats);
-                let (_, kinematics) = pass.measured(&ctx, &values);
-                let log = pass.state_log.borrow();
+                }
                 let mut carried = Vec::new();
-                for (&a, kin) in &kinematics {
-                    if log.state_of(a) != 0 || pass.held_pressed(ctx.modes, a) {
-                        continue;
-                    }
-                    let nu = normals.normal(pass.nodes[a]).unwrap_or_default();
-                    let Some(law) = pass.normal_law(&ctx, a, nu, kin) else {
-                        continue;
-                    };
+                for (a, law) in self.laws(iface, pass, &x_to) {
                     let depth = law.p / (law.prm.eps_n * pass.state[a].h);
-                    if depth > CLOSING_DEPTH {
+                    if open.contains(&a) && depth > CLOSING_DEPTH {
                         carried.push(a);
                         closing.deepest = closing.deepest.max(depth);
                     }
@@ -75,5 +74,30 @@ impl ContactInterfaces {
         for pass in self.passes() {
             pass.closing_held.borrow_mut().clear();
         }
+    }
+
+    /// The normal law at positions `x` of every held traction node of `pass` that has one (the
+    /// pass's values there kept for the evaluation that follows); none where the normals cannot
+    /// be computed.
+    fn laws(
+        &self,
+        iface: &ContactInterface,
+        pass: &ContactPass,
+        x: &[[f64; 3]],
+    ) -> Vec<(usize, NormalLaw)> {
+        let ctx = iface.context(self.modes.get(), x, &self.x_old);
+        let Ok(normals) = pass.normals(ctx.x) else {
+            return Vec::new();
+        };
+        let mut stats = RejectStats::default();
+        let values = pass.values_at(&ctx, Some(&self.timings), &mut stats);
+        let (_, kinematics) = pass.measured(&ctx, &values);
+        kinematics
+            .iter()
+            .filter_map(|(&a, kin)| {
+                let nu = normals.normal(pass.nodes[a]).unwrap_or_default();
+                pass.normal_law(&ctx, a, nu, kin).map(|law| (a, law))
+            })
+            .collect()
     }
 }
