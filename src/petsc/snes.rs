@@ -929,8 +929,6 @@ unsafe fn second_solve(
     x: &Vector,
     y: &mut Vector,
 ) -> Result<bool, CallbackError> {
-    let mut first = y.duplicate()?;
-    y.copy_to(&mut first)?;
     let Some(second) = c.second_solve.as_deref_mut() else {
         return Ok(false);
     };
@@ -938,10 +936,15 @@ unsafe fn second_solve(
         return Ok(false);
     }
     c.second_solves += 1;
-    let solved = solve_again(ls, c, x, y);
+    let first = copy_of(y);
+    let solved = match first {
+        Ok(_) => solve_again(ls, c, x, y),
+        Err(_) => Ok(false),
+    };
     if let Some(second) = c.second_solve.as_deref_mut() {
         second.release();
     }
+    let first = first?;
     // A state the second solve cannot evaluate (or a stop asked for at its Jacobian, which
     // the next one finds again) leaves the first update.
     let solved = match solved {
@@ -964,6 +967,13 @@ unsafe fn second_solve(
         second.judged(kept);
     }
     Ok(kept)
+}
+
+/// A copy of `v`.
+fn copy_of(v: &Vector) -> Result<Vector> {
+    let mut copy = v.duplicate()?;
+    v.copy_to(&mut copy)?;
+    Ok(copy)
 }
 
 /// The update `y` at `x` solved again, with the tangent and residual assembled anew at `x`,

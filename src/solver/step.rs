@@ -848,7 +848,7 @@ impl SecondSolve for HoldClosing<'_> {
             "{}",
             match kept {
                 true => "second update kept",
-                false => "first update kept (the second's full step leaves the larger residual)",
+                false => "first update kept",
             }
         ));
     }
