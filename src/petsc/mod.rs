@@ -33,7 +33,7 @@ pub use ksp::{Ksp, KspOutcome, LinearPath};
 pub use matrix::{Matrix, NullSpace, Sparsity};
 pub use owned_rows::OwnedRows;
 pub use scatter::Scatter;
-pub use snes::{CallbackError, SecondSolve, Snes, SnesOutcome, StepLimitFn};
+pub use snes::{CallbackError, Snes, SnesOutcome, UpdateCheck};
 pub use vector::Vector;
 
 /// PETSc's index type (32-bit in Debian's build; asserted at start-up).

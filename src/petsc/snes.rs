@@ -68,7 +68,7 @@ pub struct SnesOutcome {
     /// shortening of an update is not the line search's and does not count). Read by the
     /// default convergence test only: false when `-snes_convergence_test` replaces it.
     pub shortened: bool,
-    /// Newton updates solved a second time ([`SecondSolve`]; `linear_iterations` counts their
+    /// Newton updates solved a second time ([`UpdateCheck`]; `linear_iterations` counts their
     /// linear iterations), and those the second update replaced.
     pub second_solves: usize,
     pub second_solves_kept: usize,
@@ -155,22 +155,27 @@ fn options_error(options_source: &str, e: Error) -> Error {
 
 type ResidualFn<'a> = dyn FnMut(&Vector, &mut Vector) -> Result<(), CallbackError> + 'a;
 type JacobianFn<'a> = dyn FnMut(&Vector, &mut Matrix) -> Result<(), CallbackError> + 'a;
-/// `limit(x, y)`: the fraction (at most 1, above 0 for a finite update) of the Newton update
-/// `-y` from `x` to take.
-pub type StepLimitFn<'a> = dyn FnMut(&Vector, &Vector) -> Result<f64, CallbackError> + 'a;
-/// A Newton update solved a second time, in the line search's pre-check (after the
-/// [`StepLimitFn`]): where [`SecondSolve::ask`] says so, the tangent and residual at `x` are
-/// assembled again (with the law as `ask` left it) and the update solved with them, at the
-/// linear tolerance of the first solve; after [`SecondSolve::release`], the second update (the
-/// step limit applied to it too) replaces the first where the solve's residual at its full
-/// step is the smaller. Only with full steps and `bt`, the line searches whose first trial is
-/// the full step.
-pub trait SecondSolve {
+/// The line search's pre-check of every Newton update `-y` from `x`.
+///
+/// [`UpdateCheck::limit`] shortens the update. Where [`UpdateCheck::ask`] then says so, the
+/// update is solved a second time: the tangent and residual at `x` are assembled again (with
+/// the law as `ask` left it) and the update solved with them, at the linear tolerance of the
+/// first solve; after [`UpdateCheck::release`], the second update (shortened by `limit` too)
+/// replaces the first where the solve's residual at its full step is the smaller. Second
+/// solves are made only with full steps and `bt`, the line searches whose first trial is the
+/// full step.
+pub trait UpdateCheck {
+    /// The fraction (at most 1, above 0 for a finite update) of the update `-y` from `x` to
+    /// take (*collective*: the same on every rank).
+    fn limit(&mut self, x: &Vector, y: &Vector) -> Result<f64, CallbackError>;
     /// Whether to solve the update `-y` from `x` again: true once the caller changed its
-    /// residual's law at `x` for the second solve (*collective*: the same on every rank).
-    fn ask(&mut self, x: &Vector, y: &Vector) -> Result<bool, CallbackError>;
+    /// residual's law at `x` for the second solve (*collective*). Called right after the
+    /// `limit` that shortened `y`, with nothing evaluated between. Never, unless implemented.
+    fn ask(&mut self, _x: &Vector, _y: &Vector) -> Result<bool, CallbackError> {
+        Ok(false)
+    }
     /// The second solve is over: the law as it was before `ask`.
-    fn release(&mut self);
+    fn release(&mut self) {}
     /// Whether the second update replaced the first.
     fn judged(&mut self, _kept: bool) {}
 }
@@ -183,8 +188,7 @@ enum Failure {
 struct Context<'a> {
     residual: &'a mut ResidualFn<'a>,
     jacobian: &'a mut JacobianFn<'a>,
-    step_limit: Option<&'a mut StepLimitFn<'a>>,
-    second_solve: Option<&'a mut dyn SecondSolve>,
+    update_check: Option<&'a mut dyn UpdateCheck>,
     /// The second solves of the solve under way: made, kept, and their linear iterations.
     second_solves: usize,
     second_solves_kept: usize,
@@ -375,27 +379,25 @@ impl Snes {
         residual: &'a mut ResidualFn<'a>,
         jacobian: &'a mut JacobianFn<'a>,
     ) -> Result<SnesOutcome> {
-        self.solve_limited(x, jac, (residual, jacobian), None, None)
+        self.solve_limited(x, jac, (residual, jacobian), None)
     }
 
-    /// [`Snes::solve`], with every Newton update first shortened to the fraction
-    /// `step_limit(x, y)` of it (a pre-check of the line search: `basic` and `bt` take at
-    /// most the shortened update, `l2` searches along it and may go beyond), and solved a
-    /// second time where `second_solve` asks for it.
+    /// [`Snes::solve`], with every Newton update checked by `update_check` (a pre-check of
+    /// the line search): shortened to the fraction [`UpdateCheck::limit`] says (`basic` and
+    /// `bt` take at most the shortened update, `l2` searches along it and may go beyond), and
+    /// solved a second time where [`UpdateCheck::ask`] says so.
     pub fn solve_limited<'a>(
         &mut self,
         x: &mut Vector,
         jac: &mut Matrix,
         (residual, jacobian): (&'a mut ResidualFn<'a>, &'a mut JacobianFn<'a>),
-        step_limit: Option<&'a mut StepLimitFn<'a>>,
-        second_solve: Option<&'a mut dyn SecondSolve>,
+        update_check: Option<&'a mut dyn UpdateCheck>,
     ) -> Result<SnesOutcome> {
-        let limited = step_limit.is_some() || second_solve.is_some();
+        let limited = update_check.is_some();
         let mut ctx = Context {
             residual,
             jacobian,
-            step_limit,
-            second_solve,
+            update_check,
             second_solves: 0,
             second_solves_kept: 0,
             second_solve_its: 0,
@@ -639,21 +641,9 @@ impl Snes {
         let ksp = ksp_of(self.raw)?;
         chk!(KSPSetOperators(ksp, a.raw, a.raw))?;
         // Eisenstat-Walker's tolerance (`-snes_ksp_ew`) is computed from the norms of a
-        // running Newton solve, which a solve outside it lacks: off for this one, which takes
-        // the options' own tolerance instead of the last Newton step's.
-        let mut ew = p::PetscBool::PETSC_FALSE;
-        chk!(SNESKSPGetUseEW(self.raw, &mut ew))?;
-        chk!(SNESKSPSetUseEW(self.raw, p::PetscBool::PETSC_FALSE))?;
-        if ew == p::PetscBool::PETSC_TRUE {
-            let (_, atol, dtol, max_it) = ksp_tolerances(ksp)?;
-            chk!(KSPSetTolerances(ksp, self.linear_rtol, atol, dtol, max_it))?;
-        }
-        let solved = chk!(KSPSolve(ksp, b.raw, x.raw));
-        chk!(SNESKSPSetUseEW(self.raw, ew))?;
-        solved?;
-        let mut reason = p::KSPConvergedReason(0);
-        chk!(KSPGetConvergedReason(ksp, &mut reason))?;
-        Ok(reason.0 > 0)
+        // running Newton solve, which a solve outside it lacks: this one takes the options'
+        // own tolerance instead of the last Newton step's.
+        solve_without_ew(self.raw, b, x, Some(self.linear_rtol))
     }
 
     /// Null pivots MUMPS met in the last factorization (`INFOG(28)`, with null-pivot detection
@@ -868,7 +858,7 @@ fn field_preconditioners(pc: p::PC) -> Result<Vec<p::PC>> {
     pcs
 }
 
-/// The line search's pre-check: the [`StepLimitFn`], then the [`SecondSolve`].
+/// The line search's pre-check: the [`UpdateCheck`].
 unsafe extern "C" fn pre_check_trampoline(
     ls: p::SNESLineSearch,
     x: p::Vec,
@@ -883,7 +873,7 @@ unsafe extern "C" fn pre_check_trampoline(
             let xv = Vector::from_borrowed(x)?;
             let mut yv = Vector::from_borrowed(y)?;
             let mut any = limit_update(c, &xv, &mut yv)?;
-            if c.second_solve.is_some() && starts_from_full_step(ls)? {
+            if starts_from_full_step(ls)? {
                 any |= second_solve(ls, c, &xv, &mut yv)?;
             }
             if any {
@@ -894,12 +884,12 @@ unsafe extern "C" fn pre_check_trampoline(
     )
 }
 
-/// The update `y` at `x` shortened by the [`StepLimitFn`]; whether it was.
+/// The update `y` at `x` shortened by [`UpdateCheck::limit`]; whether it was.
 fn limit_update(c: &mut Context, x: &Vector, y: &mut Vector) -> Result<bool, CallbackError> {
-    let Some(limit) = c.step_limit.as_mut() else {
+    let Some(check) = c.update_check.as_deref_mut() else {
         return Ok(false);
     };
-    let fraction = limit(x, y)?;
+    let fraction = check.limit(x, y)?;
     if fraction < 1.0 {
         y.scale(fraction)?;
     }
@@ -907,7 +897,7 @@ fn limit_update(c: &mut Context, x: &Vector, y: &mut Vector) -> Result<bool, Cal
 }
 
 /// Whether the line search `ls` starts from the full Newton step (full steps, `bt`): the
-/// ones whose first trial judges a [`SecondSolve`].
+/// ones whose first trial judges a second solve ([`UpdateCheck::ask`]).
 ///
 /// # Safety
 /// `ls` is a valid line search.
@@ -918,7 +908,7 @@ unsafe fn starts_from_full_step(ls: p::SNESLineSearch) -> Result<bool> {
     Ok(matches!(type_name(name).as_str(), "basic" | "none" | "bt"))
 }
 
-/// The [`SecondSolve`] of the update `y` at `x`, where its `ask` wants one; true when the
+/// The second solve of the update `y` at `x`, where [`UpdateCheck::ask`] wants one; true when the
 /// second update replaced `y`.
 ///
 /// # Safety
@@ -929,20 +919,20 @@ unsafe fn second_solve(
     x: &Vector,
     y: &mut Vector,
 ) -> Result<bool, CallbackError> {
-    let Some(second) = c.second_solve.as_deref_mut() else {
+    let Some(check) = c.update_check.as_deref_mut() else {
         return Ok(false);
     };
-    if !second.ask(x, y)? {
+    if !check.ask(x, y)? {
         return Ok(false);
     }
     c.second_solves += 1;
-    let first = copy_of(y);
+    let first = y.copy();
     let solved = match first {
         Ok(_) => solve_again(ls, c, x, y),
         Err(_) => Ok(false),
     };
-    if let Some(second) = c.second_solve.as_deref_mut() {
-        second.release();
+    if let Some(check) = c.update_check.as_deref_mut() {
+        check.release();
     }
     let first = first?;
     // A state the second solve cannot evaluate (or a stop asked for at its Jacobian, which
@@ -963,17 +953,10 @@ unsafe fn second_solve(
     } else {
         first.copy_to(y)?;
     }
-    if let Some(second) = c.second_solve.as_deref_mut() {
-        second.judged(kept);
+    if let Some(check) = c.update_check.as_deref_mut() {
+        check.judged(kept);
     }
     Ok(kept)
-}
-
-/// A copy of `v`.
-fn copy_of(v: &Vector) -> Result<Vector> {
-    let mut copy = v.duplicate()?;
-    v.copy_to(&mut copy)?;
-    Ok(copy)
 }
 
 /// The update `y` at `x` solved again, with the tangent and residual assembled anew at `x`,
@@ -1006,27 +989,39 @@ unsafe fn solve_again(
     }
     let mut f = x.duplicate()?;
     (c.residual)(x, &mut f)?;
-    let ksp = ksp_of(snes)?;
     // Eisenstat-Walker's tolerance is the one the first solve took (still the solver's):
     // computed again here it would see no progress and take its loosest.
+    let solved = solve_without_ew(snes, &f, y, None)?;
+    let mut its: PetscInt = 0;
+    chk!(KSPGetIterationNumber(ksp_of(snes)?, &mut its))?;
+    c.second_solve_its += its.max(0) as usize;
+    Ok(solved)
+}
+
+/// `b` solved into `x` with the linear solver of `snes` and its operators as they are,
+/// Eisenstat-Walker's tolerance (`-snes_ksp_ew`) not computed for it: at the relative
+/// tolerance `rtol` where that is given and Eisenstat-Walker is on, else at the solver's
+/// current one. Whether the solve converged.
+fn solve_without_ew(snes: p::SNES, b: &Vector, x: &mut Vector, rtol: Option<f64>) -> Result<bool> {
+    let ksp = ksp_of(snes)?;
     let mut ew = p::PetscBool::PETSC_FALSE;
     chk!(SNESKSPGetUseEW(snes, &mut ew))?;
     chk!(SNESKSPSetUseEW(snes, p::PetscBool::PETSC_FALSE))?;
-    let solved = chk!(KSPSolve(ksp, f.raw, y.raw));
+    if let (p::PetscBool::PETSC_TRUE, Some(rtol)) = (ew, rtol) {
+        let (_, atol, dtol, max_it) = ksp_tolerances(ksp)?;
+        chk!(KSPSetTolerances(ksp, rtol, atol, dtol, max_it))?;
+    }
+    let solved = chk!(KSPSolve(ksp, b.raw, x.raw));
     chk!(SNESKSPSetUseEW(snes, ew))?;
     solved?;
     let mut reason = p::KSPConvergedReason(0);
     chk!(KSPGetConvergedReason(ksp, &mut reason))?;
-    let mut its: PetscInt = 0;
-    chk!(KSPGetIterationNumber(ksp, &mut its))?;
-    c.second_solve_its += its.max(0) as usize;
     Ok(reason.0 > 0)
 }
 
 /// `|F(x - y)|`, infinite where the residual cannot be evaluated there.
 fn full_step_norm(c: &mut Context, x: &Vector, y: &Vector) -> Result<f64, CallbackError> {
-    let mut w = x.duplicate()?;
-    x.copy_to(&mut w)?;
+    let mut w = x.copy()?;
     w.axpy(-1.0, y)?;
     let mut f = x.duplicate()?;
     match (c.residual)(&w, &mut f) {

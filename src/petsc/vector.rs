@@ -48,6 +48,13 @@ impl Vector {
         Ok(Vector { raw })
     }
 
+    /// A new vector with the same layout and values.
+    pub fn copy(&self) -> Result<Vector> {
+        let mut copy = self.duplicate()?;
+        self.copy_to(&mut copy)?;
+        Ok(copy)
+    }
+
     /// Copies the values of `self` into `dst` (same layout).
     pub fn copy_to(&self, dst: &mut Vector) -> Result<()> {
         chk!(VecCopy(self.raw, dst.raw))

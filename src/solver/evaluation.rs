@@ -117,14 +117,29 @@ impl Evaluation<'_> {
         Ok(verdict)
     }
 
-    /// Holds the contact nodes that the Newton update `-y` from `x` carries through the other
-    /// surface ([`Model::hold_closing`]): how many over every rank, and the deepest; none held
-    /// when that is none (*collective*).
-    pub fn hold_closing(&self, x: &Vector, y: &Vector) -> Result<Closing> {
+    /// Loads the Newton iterate `x` into the evaluator; the update `-y` from it at every dof
+    /// this rank touches ([`Evaluator::update_of`]).
+    pub fn load_update(&self, x: &Vector, y: &Vector) -> Result<Vec<f64>> {
         let mut ev = self.cx.evaluator.borrow_mut();
         ev.load(self.cx.scene, &self.cx.dofs, x)?;
-        let du = ev.update_of(&self.cx.dofs, y)?;
-        let to: Vec<f64> = ev.u.iter().zip(&du).map(|(u, d)| u + d).collect();
+        ev.update_of(&self.cx.dofs, y)
+    }
+
+    /// The fraction of the update `du` (as [`Evaluation::load_update`] returns it) from the
+    /// loaded iterate that stays within the contact search's reach, on this rank
+    /// ([`Model::step_fraction`]).
+    pub fn step_fraction(&self, du: &[f64]) -> f64 {
+        let ev = self.cx.evaluator.borrow();
+        self.model.step_fraction(&ev.state(self.cx.scene), du)
+    }
+
+    /// Holds the contact nodes that the update `du` (as [`Evaluation::load_update`] returns
+    /// it) from the loaded iterate carries through the other surface
+    /// ([`Model::hold_closing`]): how many over every rank, and the deepest; none held when
+    /// that is none (*collective*).
+    pub fn hold_closing(&self, du: &[f64]) -> Closing {
+        let ev = self.cx.evaluator.borrow();
+        let to: Vec<f64> = ev.u.iter().zip(du).map(|(u, d)| u + d).collect();
         let to = State {
             scene: self.cx.scene,
             u: &to,
@@ -138,7 +153,7 @@ impl Evaluation<'_> {
         }
         let mut deepest = here.deepest;
         world.all_reduce_into(&here.deepest, &mut deepest, SystemOperation::max());
-        Ok(Closing { held, deepest })
+        Closing { held, deepest }
     }
 
     /// `F(x; t)` at load factor `t`, or `None` where a rank cannot evaluate it (*collective*).

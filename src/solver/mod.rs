@@ -26,7 +26,7 @@
 //! `contact::frictional`), two iterations when the first raised the residual, kept when it
 //! lowers the residual. A Newton update that carries contact nodes open at the iterate through
 //! the other surface is solved again with them held pressed (`newton.hold_closing`; a
-//! pre-check of SNES's line search, `petsc::SecondSolve`), and taken where its full step leaves
+//! pre-check of SNES's line search, `petsc::UpdateCheck`), and taken where its full step leaves
 //! the smaller residual. After a converged solve, the augmented
 //! contributions take an Uzawa step, and the step is solved again until they meet their
 //! tolerances (`step`). Those solves stop at `newton.augmented_rtol`; once the tolerances are

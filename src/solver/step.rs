@@ -11,7 +11,7 @@ use crate::error::{print_warning, Error, Result};
 use crate::interrupt;
 use crate::io::output::StepRecord;
 use crate::model::Augmented;
-use crate::petsc::{CallbackError, SecondSolve, SnesOutcome, StepLimitFn, Vector};
+use crate::petsc::{CallbackError, SnesOutcome, UpdateCheck, Vector};
 
 use super::assembly;
 use super::collective::{any_rank, sum_over_ranks};
@@ -460,41 +460,23 @@ impl Run<'_> {
             let _stage = assembly_stage.map(|st| st.push()).transpose()?;
             report(ev.jacobian(x, j)?)
         };
-        // Contact keeps every update within its search's reach (`reach_fraction`).
-        let (cx, model, monitor) = (&self.cx, &self.model, self.contact_monitor);
-        let mut step_limit = |x: &Vector, y: &Vector| -> Result<f64, CallbackError> {
-            let mut ev = cx.evaluator.borrow_mut();
-            ev.load(cx.scene, &cx.dofs, x)?;
-            let du = ev.update_of(&cx.dofs, y)?;
-            let local = model.step_fraction(&ev.state(cx.scene), &du);
-            let mut fraction = local;
-            world.all_reduce_into(&local, &mut fraction, SystemOperation::min());
-            if monitor && fraction < 1.0 && cx.rank == 0 {
-                println!(
-                    "    Newton update shortened to {fraction:.3e} of it (contact search reach)"
-                );
-            }
-            Ok(fraction)
+        let mut contact_updates = ContactUpdates {
+            ev,
+            monitor: self.contact_monitor,
+            hold_closing: self.cx.scene.newton.hold_closing,
+            resolving: &resolving,
+            update: None,
         };
-        let limit = self
+        let update_check = self
             .model
             .pattern_moves()
-            .then_some(&mut step_limit as &mut StepLimitFn);
-        // Mortar contact: an update that carries open nodes through the other surface is
-        // solved again with them held pressed (`newton.hold_closing`).
-        let mut hold_closing = HoldClosing {
-            ev,
-            monitor,
-            resolving: &resolving,
-        };
-        let second_solve = (cx.scene.newton.hold_closing && model.pattern_moves())
-            .then_some(&mut hold_closing as &mut dyn SecondSolve);
+            .then_some(&mut contact_updates as &mut dyn UpdateCheck);
         let (snes, x, jac) = (
             &mut self.linear.snes,
             &mut self.linear.x,
             &mut self.linear.jac,
         );
-        snes.solve_limited(x, jac, (&mut residual, &mut jacobian), limit, second_solve)
+        snes.solve_limited(x, jac, (&mut residual, &mut jacobian), update_check)
     }
 
     /// After a converged solve: one Uzawa step of the augmented contributions. Returns true
@@ -814,19 +796,48 @@ impl Run<'_> {
     }
 }
 
-/// The second solve of a Newton update that carries contact nodes open at the iterate through
-/// the other surface (`newton.hold_closing`; `contact::frictional`, "Nodes a Newton update
-/// closes"): those nodes held pressed for it.
-struct HoldClosing<'a> {
+/// The check of every Newton update of a contact whose pattern moves. The update is kept
+/// within the contact search's reach (`reach_fraction`). Where it carries contact nodes open
+/// at the iterate through the other surface, it is solved a second time with those nodes held
+/// pressed (`newton.hold_closing`; `contact::frictional`, "Nodes a Newton update closes").
+struct ContactUpdates<'a> {
     ev: Evaluation<'a>,
     monitor: bool,
+    hold_closing: bool,
     /// Set while the law holds them: the second solve's tangent is not reported.
     resolving: &'a Cell<bool>,
+    /// The update as the last `limit` shortened it, gathered at every dof this rank touches
+    /// (with `hold_closing`, for the `ask` that follows it).
+    update: Option<Vec<f64>>,
 }
 
-impl SecondSolve for HoldClosing<'_> {
+impl UpdateCheck for ContactUpdates<'_> {
+    fn limit(&mut self, x: &Vector, y: &Vector) -> Result<f64, CallbackError> {
+        let mut du = self.ev.load_update(x, y)?;
+        let local = self.ev.step_fraction(&du);
+        let cx = self.ev.cx;
+        let mut fraction = local;
+        cx.world
+            .all_reduce_into(&local, &mut fraction, SystemOperation::min());
+        if fraction < 1.0 {
+            self.say(format_args!(
+                "Newton update shortened to {fraction:.3e} of it (contact search reach)"
+            ));
+            du.iter_mut().for_each(|d| *d *= fraction);
+        }
+        self.update = self.hold_closing.then_some(du);
+        Ok(fraction)
+    }
+
     fn ask(&mut self, x: &Vector, y: &Vector) -> Result<bool, CallbackError> {
-        let closing = self.ev.hold_closing(x, y)?;
+        if !self.hold_closing {
+            return Ok(false);
+        }
+        let du = match self.update.take() {
+            Some(du) => du,
+            None => self.ev.load_update(x, y)?,
+        };
+        let closing = self.ev.hold_closing(&du);
         if closing.held == 0 {
             return Ok(false);
         }
@@ -854,7 +865,7 @@ impl SecondSolve for HoldClosing<'_> {
     }
 }
 
-impl HoldClosing<'_> {
+impl ContactUpdates<'_> {
     /// A `-contact_monitor` line, on rank 0.
     fn say(&self, line: std::fmt::Arguments) {
         if self.monitor && self.ev.cx.rank == 0 {
