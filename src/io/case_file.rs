@@ -519,6 +519,13 @@ pub struct NewtonSpec {
     /// (docs/performance.md, "Newton updates that close nodes, solved again").
     #[serde(default = "yes")]
     pub hold_closing: bool,
+    /// The iterative path with interfaces: after the field split, a coarse correction that
+    /// spans the interface (the tangent projected onto the bulk multigrid's first coarse space
+    /// and the interface's dofs, solved exactly; `-pc_composite_pcs fieldsplit,shell`). Fewer
+    /// GMRES iterations, which grow less with the mesh, at a higher cost per iteration. Default
+    /// false (docs/performance.md, "The interface coarse correction").
+    #[serde(default)]
+    pub coarse_correction: bool,
 }
 
 /// The linear solver a case asks for (`newton.linear_solver`).
@@ -542,6 +549,7 @@ impl Default for NewtonSpec {
             linear_solver: LinearSolverSpec::Auto,
             direct_below: None,
             hold_closing: true,
+            coarse_correction: false,
         }
     }
 }

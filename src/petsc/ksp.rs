@@ -74,8 +74,13 @@ pub enum LinearPath {
     /// GMRES preconditioned by algebraic multigrid (GAMG, with the matrix's near null space).
     /// With `interface_split`, a multiplicative field split: the interface dofs solved exactly
     /// (LU through MUMPS), then multigrid on the other dofs
-    /// ([`super::Snes::split_interface`] names the fields).
-    Iterative { interface_split: bool },
+    /// ([`super::Snes::split_interface`] names the fields); with `coarse_correction` as well,
+    /// the split then the interface coarse correction (`super::coarse`), as a multiplicative
+    /// composite.
+    Iterative {
+        interface_split: bool,
+        coarse_correction: bool,
+    },
 }
 
 /// The options of the iterative path ([`LinearPath::Iterative`]), each a default the user's
@@ -109,9 +114,10 @@ const EW_RTOL_MAX: &str = "1e-3";
 /// long as the matrix lives (here the whole run); the iterative path instead sets the multigrid
 /// up anew once per load step and keeps it whole through the step
 /// ([`super::Snes::rebuild_multigrid`]), unless the user gives one of these.
-pub(crate) const MULTIGRID_REUSE: [&str; 2] = [
+pub(crate) const MULTIGRID_REUSE: [&str; 3] = [
     "-pc_gamg_reuse_interpolation",
     "-fieldsplit_bulk_pc_gamg_reuse_interpolation",
+    "-sub_0_fieldsplit_bulk_pc_gamg_reuse_interpolation",
 ];
 
 /// The field split of [`LinearPath::Iterative`] with interfaces. The bulk's multigrid smooths
@@ -129,6 +135,27 @@ const INTERFACE_SPLIT: [(&str, &str); 8] = [
     ("-fieldsplit_bulk_mg_levels_ksp_max_it", "1"),
 ];
 
+/// [`INTERFACE_SPLIT`], the interface coarse correction (`super::coarse`), and the split
+/// again: a symmetric multiplicative composite (the split's options take the prefix
+/// `sub_0_`). Against the split then the correction only, fewer GMRES iterations for the
+/// second split's cost, and the tight solves of the load-step predictor do not stall
+/// (docs/performance.md, "The interface coarse correction").
+const INTERFACE_COARSE: [(&str, &str); 10] = [
+    ("-pc_type", "composite"),
+    ("-pc_composite_type", "symmetric_multiplicative"),
+    ("-pc_composite_pcs", "fieldsplit,shell"),
+    ("-sub_0_pc_fieldsplit_type", "multiplicative"),
+    ("-sub_0_fieldsplit_interface_ksp_type", "preonly"),
+    ("-sub_0_fieldsplit_interface_pc_type", "lu"),
+    (
+        "-sub_0_fieldsplit_interface_pc_factor_mat_solver_type",
+        "mumps",
+    ),
+    ("-sub_0_fieldsplit_bulk_ksp_type", "preonly"),
+    ("-sub_0_fieldsplit_bulk_pc_type", "gamg"),
+    ("-sub_0_fieldsplit_bulk_mg_levels_ksp_max_it", "1"),
+];
+
 /// Every option [`set_linear_solver_defaults`] may set (restored after each run of a study:
 /// `options::Override`).
 pub(crate) fn defaulted_options() -> impl Iterator<Item = &'static str> {
@@ -139,6 +166,7 @@ pub(crate) fn defaulted_options() -> impl Iterator<Item = &'static str> {
                 .iter()
                 .chain(&INEXACT_NEWTON)
                 .chain(&INTERFACE_SPLIT)
+                .chain(&INTERFACE_COARSE)
                 .map(|o| o.0),
         )
 }
@@ -150,11 +178,23 @@ pub(crate) fn defaulted_options() -> impl Iterator<Item = &'static str> {
 pub(crate) fn set_linear_solver_defaults(path: LinearPath) -> Result<()> {
     use super::options::{has, set_default};
     let (ksp, pc) = (has("-ksp_type")?, has("-pc_type")?);
-    if let (false, false, LinearPath::Iterative { interface_split }) = (ksp, pc, path) {
+    if let (
+        false,
+        false,
+        LinearPath::Iterative {
+            interface_split,
+            coarse_correction,
+        },
+    ) = (ksp, pc, path)
+    {
         for (name, value) in ITERATIVE.into_iter().chain(INEXACT_NEWTON) {
             set_default(name, value)?;
         }
-        if interface_split {
+        if interface_split && coarse_correction {
+            for (name, value) in INTERFACE_COARSE {
+                set_default(name, value)?;
+            }
+        } else if interface_split {
             for (name, value) in INTERFACE_SPLIT {
                 set_default(name, value)?;
             }

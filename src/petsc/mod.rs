@@ -14,6 +14,7 @@
 //! The bindings assume 32-bit `PetscInt` and 64-bit real `PetscScalar`; [`Petsc::initialize`]
 //! asserts both against what PETSc was compiled with.
 
+mod coarse;
 mod error;
 mod index_set;
 mod init;
@@ -107,19 +108,33 @@ pub fn comm() -> petsc_ffi::MPI_Comm {
 
 /// The number of ranks of [`comm`].
 pub fn comm_size() -> crate::Result<usize> {
+    comm_query("MPI_Comm_size", petsc_ffi::MPI_Comm_size)
+}
+
+/// This rank's index in [`comm`].
+pub fn comm_rank() -> crate::Result<usize> {
+    comm_query("MPI_Comm_rank", petsc_ffi::MPI_Comm_rank)
+}
+
+/// The number `query` (`MPI_Comm_size`, `MPI_Comm_rank`) gives for [`comm`].
+fn comm_query(
+    name: &str,
+    query: unsafe extern "C" fn(
+        petsc_ffi::MPI_Comm,
+        *mut std::os::raw::c_int,
+    ) -> std::os::raw::c_int,
+) -> crate::Result<usize> {
     ensure_initialized()?;
-    let mut size: std::os::raw::c_int = 0;
+    let mut value: std::os::raw::c_int = 0;
     // SAFETY: MPI is running (rsmpi started it before PETSc, and `ensure_initialized` checked
-    // that PETSc is up and not finalized), `comm()` is a valid communicator, and `size` is a
+    // that PETSc is up and not finalized), `comm()` is a valid communicator, and `value` is a
     // valid out-pointer.
-    let code = unsafe { petsc_ffi::MPI_Comm_size(comm(), &mut size) };
+    let code = unsafe { query(comm(), &mut value) };
     if code != 0 {
         // One rank's failure, not the job's (`Error::is_collective`): it must abort the job.
-        return Err(crate::Error::Other(format!(
-            "MPI_Comm_size failed ({code})"
-        )));
+        return Err(crate::Error::Other(format!("{name} failed ({code})")));
     }
-    Ok(usize::try_from(size).unwrap_or(0))
+    Ok(usize::try_from(value).unwrap_or(0))
 }
 
 /// Sets (or, with `None`, unsets) the communicator returned by [`comm`].

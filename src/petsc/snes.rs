@@ -420,6 +420,7 @@ impl Snes {
             Some(jacobian_trampoline),
             ctx_ptr
         ))?;
+        composite_operators(self.raw, jac)?;
         let n = super::to_petsc_int(self.history.len())?;
         chk!(SNESSetConvergenceHistory(
             self.raw,
@@ -544,8 +545,9 @@ impl Snes {
     /// first field split of a composite; returns false and does nothing for another):
     /// `interface`, the owned global dofs `interface` (sorted), and `bulk`, the other owned
     /// dofs `[start, start + count)`, with `modes` (a near null space on the owned rows)
-    /// restricted to them as the bulk's near null space, for multigrid. Before the first solve.
-    /// Collective.
+    /// restricted to them as the bulk's near null space, for multigrid. A composite's `shell`
+    /// part becomes the split's interface coarse correction (`super::coarse`). Before the
+    /// first solve. Collective.
     pub fn split_interface(
         &mut self,
         interface: &[PetscInt],
@@ -575,6 +577,12 @@ impl Snes {
             interface_set.raw
         ))?;
         chk!(PCFieldSplitSetIS(pc, c"bulk".as_ptr(), bulk_set.raw))?;
+        let (top, top_type) = self.preconditioner()?;
+        for part in composite_parts(top, &top_type)? {
+            if pc_type_name(part)? == "shell" {
+                super::coarse::attach(part, pc)?;
+            }
+        }
         Ok(true)
     }
 
@@ -640,6 +648,7 @@ impl Snes {
     pub fn linear_solve(&mut self, a: &Matrix, b: &Vector, x: &mut Vector) -> Result<bool> {
         let ksp = ksp_of(self.raw)?;
         chk!(KSPSetOperators(ksp, a.raw, a.raw))?;
+        composite_operators(self.raw, a)?;
         // Eisenstat-Walker's tolerance (`-snes_ksp_ew`) is computed from the norms of a
         // running Newton solve, which a solve outside it lacks: this one takes the options'
         // own tolerance instead of the last Newton step's.
@@ -806,9 +815,9 @@ fn set_multigrid_reuse(snes: p::SNES, keep: bool) -> Result<()> {
     } else {
         p::PetscBool::PETSC_FALSE
     };
-    let pcs = match pc_type.as_str() {
-        "fieldsplit" => field_preconditioners(pc)?,
-        _ => vec![pc],
+    let pcs = match fieldsplit_within(pc, &pc_type)? {
+        Some(split) => field_preconditioners(split)?,
+        None => vec![pc],
     };
     for pc in pcs {
         if pc_type_name(pc)? == "gamg" {
@@ -817,6 +826,32 @@ fn set_multigrid_reuse(snes: p::SNES, keep: bool) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// A composite preconditioner's parts get its operators at its first set-up only (PETSc 3.18's
+/// `PCSetUp_Composite`): after a new matrix (the contact pattern grew) they would go on with
+/// the old one. Gives them `jac`, the matrix of the solves to come.
+fn composite_operators(snes: p::SNES, jac: &Matrix) -> Result<()> {
+    let (pc, pc_type) = preconditioner_of(snes)?;
+    for part in composite_parts(pc, &pc_type)? {
+        chk!(PCSetOperators(part, jac.raw, jac.raw))?;
+    }
+    Ok(())
+}
+
+/// The parts of `pc` when it is a composite (of type `pc_type`); none otherwise.
+fn composite_parts(pc: p::PC, pc_type: &str) -> Result<Vec<p::PC>> {
+    if pc_type != "composite" {
+        return Ok(Vec::new());
+    }
+    let mut n: PetscInt = 0;
+    chk!(PCCompositeGetNumberPC(pc, &mut n))?;
+    (0..n)
+        .map(|k| {
+            let mut part: p::PC = std::ptr::null_mut();
+            chk!(PCCompositeGetPC(pc, k, &mut part)).map(|_| part)
+        })
+        .collect()
 }
 
 /// The preconditioner of `snes`'s linear solver, and its type name (empty before one is set).
@@ -1037,13 +1072,9 @@ fn fieldsplit_within(pc: p::PC, pc_type: &str) -> Result<Option<p::PC>> {
     match pc_type {
         "fieldsplit" => Ok(Some(pc)),
         "composite" => {
-            let mut n: PetscInt = 0;
-            chk!(PCCompositeGetNumberPC(pc, &mut n))?;
-            for k in 0..n {
-                let mut sub: p::PC = std::ptr::null_mut();
-                chk!(PCCompositeGetPC(pc, k, &mut sub))?;
-                if pc_type_name(sub)? == "fieldsplit" {
-                    return Ok(Some(sub));
+            for part in composite_parts(pc, pc_type)? {
+                if pc_type_name(part)? == "fieldsplit" {
+                    return Ok(Some(part));
                 }
             }
             Ok(None)

@@ -47,11 +47,23 @@ pub(super) struct LinearChoice {
 }
 
 /// The choice for `scene` with `free_dofs` free dofs; `interfaces`: the model has interfaces
-/// (the iterative path then splits their dofs off).
+/// (the iterative path then splits their dofs off, and corrects across them with
+/// `newton.coarse_correction`).
 pub(super) fn choose(scene: &Scene, free_dofs: usize, interfaces: bool) -> Result<LinearChoice> {
     let from_options = options::has("-ksp_type")? || options::has("-pc_type")?;
     let spec = (scene.newton.linear_solver, crossover(scene));
+    let interfaces = Interfaces {
+        split: interfaces,
+        coarse_correction: interfaces && scene.newton.coarse_correction,
+    };
     Ok(decide(spec, free_dofs, interfaces, from_options))
+}
+
+/// What the iterative path does with the model's interfaces.
+#[derive(Debug, Clone, Copy)]
+struct Interfaces {
+    split: bool,
+    coarse_correction: bool,
 }
 
 /// The scene's `newton.direct_below`, or without it the threshold of its kind.
@@ -74,11 +86,12 @@ fn crossover(scene: &Scene) -> Crossover {
 fn decide(
     (spec, crossover): (LinearSolverSpec, Crossover),
     free_dofs: usize,
-    interfaces: bool,
+    interfaces: Interfaces,
     from_options: bool,
 ) -> LinearChoice {
     let iterative = LinearPath::Iterative {
-        interface_split: interfaces,
+        interface_split: interfaces.split,
+        coarse_correction: interfaces.coarse_correction,
     };
     let Crossover {
         direct_below,
@@ -104,8 +117,19 @@ fn decide(
             false,
             LinearPath::Iterative {
                 interface_split: true,
+                coarse_correction: false,
             },
         ) => "iterative (GMRES; an exact solve on the interfaces' dofs, then multigrid)",
+        (
+            false,
+            LinearPath::Iterative {
+                interface_split: true,
+                coarse_correction: true,
+            },
+        ) => {
+            "iterative (GMRES; an exact solve on the interfaces' dofs, then multigrid, then a \
+             coarse correction across the interfaces)"
+        }
         (false, LinearPath::Iterative { .. }) => "iterative (GMRES with multigrid)",
     };
     LinearChoice {
@@ -171,29 +195,52 @@ mod tests {
             source: "newton.direct_below",
         };
         let auto = (LinearSolverSpec::Auto, at(1000));
-        let path = |spec, dofs, interfaces, options| decide(spec, dofs, interfaces, options).path;
+        let path = |spec, dofs, split, options| {
+            let interfaces = Interfaces {
+                split,
+                coarse_correction: false,
+            };
+            decide(spec, dofs, interfaces, options).path
+        };
+        let split_only = |split| Interfaces {
+            split,
+            coarse_correction: false,
+        };
         assert_eq!(path(auto, 999, true, false), LinearPath::Direct);
         let split = LinearPath::Iterative {
             interface_split: true,
+            coarse_correction: false,
         };
         assert_eq!(path(auto, 1000, true, false), split);
         assert_eq!(
             path(auto, 1000, false, false),
             LinearPath::Iterative {
-                interface_split: false
+                interface_split: false,
+                coarse_correction: false,
             }
         );
         let direct = (LinearSolverSpec::Direct, at(1000));
         assert_eq!(path(direct, 1_000_000, true, false), LinearPath::Direct);
         let iterative = (LinearSolverSpec::Iterative, at(1000));
         assert_eq!(path(iterative, 10, true, false), split);
-        let chosen = decide(iterative, 10, true, true);
+        let coarse = Interfaces {
+            split: true,
+            coarse_correction: true,
+        };
+        assert_eq!(
+            decide(iterative, 10, coarse, false).path,
+            LinearPath::Iterative {
+                interface_split: true,
+                coarse_correction: true,
+            }
+        );
+        let chosen = decide(iterative, 10, split_only(true), true);
         assert!(
             chosen.why.starts_with("as PETSc's options say"),
             "{}",
             chosen.why
         );
-        let why = decide(auto, 5000, true, false).why;
+        let why = decide(auto, 5000, split_only(true), false).why;
         assert_eq!(
             why,
             "iterative (GMRES; an exact solve on the interfaces' dofs, then multigrid): 5000 \
