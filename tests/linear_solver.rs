@@ -159,11 +159,11 @@ fn a_composite_preconditioner_gets_the_interface_fields() {
 
 /// The bound on the GMRES iterations per Newton iteration over the smallest level's run with
 /// the interface coarse correction (`newton.coarse_correction`): measured 6.0 (874 in 146) on
-/// 1 rank, where the split alone takes 11.3 (1 684 in 149).
+/// 1 rank and 6.2 (901 in 146) on 2, where the split alone takes 11.3 (1 684 in 149).
 const MAX_LINEAR_PER_NEWTON_COARSE: f64 = 7.5;
 
 /// The most GMRES iterations of the smallest level's run with the coarse correction, as a
-/// fraction of those of the split alone (measured 0.52).
+/// fraction of those of the split alone on 1 rank (measured 0.52 on 1 rank, 0.54 on 2).
 const MOST_LINEAR_COARSE_OVER_SPLIT: f64 = 0.65;
 
 /// The interface coarse correction after the split (`newton.coarse_correction`) solves the

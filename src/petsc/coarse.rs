@@ -14,8 +14,8 @@
 //! ```
 //!
 //! it solves the Galerkin projection of the whole tangent exactly, `e = P (P^T A P)^-1 P^T r`
-//! (LU through MUMPS, null-pivot detection on: an aggregate's dependent rigid modes make the
-//! projection singular, and MUMPS then leaves those directions out). The interface dofs stay at
+//! (LU through MUMPS, null-pivot detection on by default: an aggregate's dependent rigid modes
+//! make the projection singular, and MUMPS then leaves those directions out). The interface dofs stay at
 //! full resolution in it, so the contact's laws (open, stick, slip) enter it exactly and no
 //! multigrid is asked to coarsen them.
 //!
@@ -32,8 +32,11 @@ use super::{chk, Matrix, PetscInt, Vector};
 use crate::error::{Error, Result};
 
 /// Makes the shell preconditioner `shell` the interface coarse correction of the field split
-/// `split` (fields `interface` and `bulk`, the bulk by GAMG). Its LU takes the options of the
-/// prefix `coarse_` after the shell's own (`-sub_1_coarse_...` in a composite).
+/// `split` (fields `interface` and `bulk`, the bulk by GAMG), a part of the same composite
+/// before it (so that the split, set up when first applied, is set up before the shell). Its
+/// LU takes the options of the prefix `coarse_` after the shell's own (`-sub_1_coarse_...` in
+/// a composite); the iterative path sets null-pivot detection there
+/// (`-sub_1_coarse_mat_mumps_icntl_24 1`, `super::ksp`).
 pub(crate) fn attach(shell: p::PC, split: p::PC) -> Result<()> {
     let mut comm = p::MPI_Comm(std::ptr::null_mut());
     chk!(PetscObjectGetComm(shell as p::PetscObject, &mut comm))?;
@@ -56,7 +59,6 @@ pub(crate) fn attach(shell: p::PC, split: p::PC) -> Result<()> {
     chk!(PCGetOptionsPrefix(shell, &mut prefix))?;
     chk!(KSPSetOptionsPrefix(ksp, prefix))?;
     chk!(KSPAppendOptionsPrefix(ksp, c"coarse_".as_ptr()))?;
-    set_default_null_pivot_detection(ksp)?;
     chk!(KSPSetFromOptions(ksp))?;
     chk!(PCShellSetContext(
         shell,
@@ -69,20 +71,6 @@ pub(crate) fn attach(shell: p::PC, split: p::PC) -> Result<()> {
         shell,
         c"interface coarse correction".as_ptr()
     ))
-}
-
-/// `-<prefix>mat_mumps_icntl_24 1` unless the options set it.
-fn set_default_null_pivot_detection(ksp: p::KSP) -> Result<()> {
-    let mut prefix: *const std::os::raw::c_char = std::ptr::null();
-    chk!(KSPGetOptionsPrefix(ksp, &mut prefix))?;
-    // SAFETY: PETSc returns its own NUL-terminated prefix, or null.
-    let prefix = match prefix.is_null() {
-        true => String::new(),
-        false => unsafe { std::ffi::CStr::from_ptr(prefix) }
-            .to_string_lossy()
-            .into_owned(),
-    };
-    super::options::set_default(&format!("-{prefix}mat_mumps_icntl_24"), "1")
 }
 
 /// The shell's context.
@@ -200,10 +188,14 @@ unsafe fn set_up(pc: p::PC) -> Result<()> {
     let (mut a, mut a_pre): (p::Mat, p::Mat) = (std::ptr::null_mut(), std::ptr::null_mut());
     chk!(PCGetOperators(pc, &mut a, &mut a_pre))?;
     let entries = prolongator_entries(c.split)?;
-    let same_p = c
+    let same_here = c
         .prolongator
         .as_ref()
         .is_some_and(|old| old.entries == entries);
+    // The same on every rank: a new `P` is made collectively.
+    let same_p = !counts_of_ranks(usize::from(!same_here))?
+        .iter()
+        .any(|&c| c > 0);
     if !same_p {
         let matrix = assemble_prolongator(a_pre, &entries)?;
         let (mut solved, mut restricted): (p::Vec, p::Vec) =
@@ -252,7 +244,18 @@ unsafe fn set_up(pc: p::PC) -> Result<()> {
         c.projected = Some(Matrix { raw: projected });
     }
     chk!(KSPSetOperators(c.ksp, projected, projected))?;
-    chk!(KSPSetUp(c.ksp))
+    chk!(KSPSetUp(c.ksp))?;
+    // A failed factorization (MUMPS's verdict, the same on every rank) ends the solve.
+    let mut lu: p::PC = std::ptr::null_mut();
+    chk!(KSPGetPC(c.ksp, &mut lu))?;
+    let mut failed = p::PCFailedReason::PC_NOERROR;
+    chk!(PCGetFailedReason(lu, &mut failed))?;
+    match failed {
+        p::PCFailedReason::PC_NOERROR => Ok(()),
+        other => Err(Error::Solve(format!(
+            "the LU of the projected tangent failed ({other:?})"
+        ))),
+    }
 }
 
 /// The entries of `P` from the split `split`'s fields and its bulk multigrid (set up).
@@ -298,8 +301,8 @@ unsafe fn prolongator_entries(split: p::PC) -> Result<Entries> {
         let mut vals: *const f64 = std::ptr::null();
         chk!(MatGetRow(bulk_p, row, &mut n, &mut cols, &mut vals))?;
         let (cols_s, vals_s) = (
-            std::slice::from_raw_parts(cols, n as usize),
-            std::slice::from_raw_parts(vals, n as usize),
+            super::slice_or_empty(cols, n.max(0) as usize),
+            super::slice_or_empty(vals, n.max(0) as usize),
         );
         for &col in cols_s {
             let q = coarse_starts[1..].partition_point(|&s| s <= col);
@@ -375,17 +378,24 @@ unsafe fn bulk_interpolation(split: p::PC) -> Result<p::Mat> {
     let mut subksp: *mut p::KSP = std::ptr::null_mut();
     chk!(PCFieldSplitGetSubKSP(split, &mut n, &mut subksp))?;
     let mut multigrid: p::PC = std::ptr::null_mut();
+    // The bulk is the second field (`Snes::split_interface` names them in that order).
     let got = match n {
         2 => chk!(KSPGetPC(*subksp.add(1), &mut multigrid)),
         _ => Err(Error::Solve(format!("a split of {n} fields, not 2"))),
     };
     chk!(petsc_ffi_free(subksp as *mut c_void))?;
     got?;
+    let pc_type = super::snes::pc_type_name(multigrid)?;
+    if pc_type != "gamg" {
+        return Err(Error::Solve(format!(
+            "the bulk field's preconditioner is {pc_type:?}, not gamg"
+        )));
+    }
     let mut levels: PetscInt = 0;
     chk!(PCMGGetLevels(multigrid, &mut levels))?;
     if levels < 2 {
         return Err(Error::Solve(
-            "the bulk field's multigrid has no coarse level (is it GAMG?)".into(),
+            "the bulk field's multigrid has no coarse level".into(),
         ));
     }
     let mut interpolation: p::Mat = std::ptr::null_mut();
@@ -408,7 +418,7 @@ unsafe fn field_indices(split: p::PC, name: &std::ffi::CStr) -> Result<Vec<Petsc
     chk!(ISGetLocalSize(is, &mut len))?;
     let mut ptr: *const PetscInt = std::ptr::null();
     chk!(ISGetIndices(is, &mut ptr))?;
-    let indices = std::slice::from_raw_parts(ptr, len.max(0) as usize).to_vec();
+    let indices = super::slice_or_empty(ptr, len.max(0) as usize).to_vec();
     chk!(ISRestoreIndices(is, &mut ptr))?;
     Ok(indices)
 }

@@ -140,7 +140,7 @@ const INTERFACE_SPLIT: [(&str, &str); 8] = [
 /// `sub_0_`). Against the split then the correction only, fewer GMRES iterations for the
 /// second split's cost, and the tight solves of the load-step predictor do not stall
 /// (docs/performance.md, "The interface coarse correction").
-const INTERFACE_COARSE: [(&str, &str); 10] = [
+const INTERFACE_COARSE: [(&str, &str); 11] = [
     ("-pc_type", "composite"),
     ("-pc_composite_type", "symmetric_multiplicative"),
     ("-pc_composite_pcs", "fieldsplit,shell"),
@@ -154,6 +154,7 @@ const INTERFACE_COARSE: [(&str, &str); 10] = [
     ("-sub_0_fieldsplit_bulk_ksp_type", "preonly"),
     ("-sub_0_fieldsplit_bulk_pc_type", "gamg"),
     ("-sub_0_fieldsplit_bulk_mg_levels_ksp_max_it", "1"),
+    ("-sub_1_coarse_mat_mumps_icntl_24", "1"),
 ];
 
 /// Every option [`set_linear_solver_defaults`] may set (restored after each run of a study:

@@ -53,6 +53,18 @@ macro_rules! chk {
 }
 pub(crate) use chk;
 
+/// A slice view of PETSc's array `ptr` of `n` items, which may be null for zero length.
+///
+/// # Safety
+/// For `n > 0`, `ptr` points to `n` valid items that outlive `'a`.
+pub(crate) unsafe fn slice_or_empty<'a, T>(ptr: *const T, n: usize) -> &'a [T] {
+    if n == 0 {
+        &[]
+    } else {
+        std::slice::from_raw_parts(ptr, n)
+    }
+}
+
 /// Converts a count or index to `PetscInt`, failing clearly past 2^31.
 pub fn to_petsc_int(n: usize) -> crate::Result<PetscInt> {
     PetscInt::try_from(n).map_err(|_| {

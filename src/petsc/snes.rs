@@ -546,8 +546,8 @@ impl Snes {
     /// `interface`, the owned global dofs `interface` (sorted), and `bulk`, the other owned
     /// dofs `[start, start + count)`, with `modes` (a near null space on the owned rows)
     /// restricted to them as the bulk's near null space, for multigrid. A composite's `shell`
-    /// part becomes the split's interface coarse correction (`super::coarse`). Before the
-    /// first solve. Collective.
+    /// part after the split becomes the split's interface coarse correction
+    /// (`super::coarse`). Before the first solve. Collective.
     pub fn split_interface(
         &mut self,
         interface: &[PetscInt],
@@ -578,7 +578,9 @@ impl Snes {
         ))?;
         chk!(PCFieldSplitSetIS(pc, c"bulk".as_ptr(), bulk_set.raw))?;
         let (top, top_type) = self.preconditioner()?;
-        for part in composite_parts(top, &top_type)? {
+        let parts = composite_parts(top, &top_type)?;
+        let after_split = parts.iter().skip_while(|&&part| part != pc).skip(1);
+        for &part in after_split {
             if pc_type_name(part)? == "shell" {
                 super::coarse::attach(part, pc)?;
             }
@@ -862,7 +864,7 @@ fn preconditioner_of(snes: p::SNES) -> Result<(p::PC, String)> {
 }
 
 /// The type name of the preconditioner `pc` (empty before one is set).
-fn pc_type_name(pc: p::PC) -> Result<String> {
+pub(super) fn pc_type_name(pc: p::PC) -> Result<String> {
     let mut pc_type: p::PCType = std::ptr::null();
     chk!(PCGetType(pc, &mut pc_type))?;
     // SAFETY: PETSc returns its static type name, or null.

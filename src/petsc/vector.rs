@@ -148,7 +148,7 @@ impl Vector {
         let mut ptr: *const f64 = std::ptr::null();
         chk!(VecGetArrayRead(self.raw, &mut ptr))?;
         // SAFETY: PETSc gives `n` readable entries until the matching restore below.
-        let out = f(unsafe { slice_or_empty(ptr, n as usize) });
+        let out = f(unsafe { super::slice_or_empty(ptr, n as usize) });
         chk!(VecRestoreArrayRead(self.raw, &mut ptr))?;
         Ok(out)
     }
@@ -173,15 +173,6 @@ impl Vector {
     /// Copy of the locally owned entries.
     pub fn to_local_vec(&self) -> Result<Vec<f64>> {
         self.with_local(|s| s.to_vec())
-    }
-}
-
-/// A slice view that tolerates a null pointer for zero length.
-unsafe fn slice_or_empty<'a>(ptr: *const f64, n: usize) -> &'a [f64] {
-    if n == 0 {
-        &[]
-    } else {
-        std::slice::from_raw_parts(ptr, n)
     }
 }
 

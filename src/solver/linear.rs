@@ -56,7 +56,18 @@ pub(super) fn choose(scene: &Scene, free_dofs: usize, interfaces: bool) -> Resul
         split: interfaces,
         coarse_correction: interfaces && scene.newton.coarse_correction,
     };
-    Ok(decide(spec, free_dofs, interfaces, from_options))
+    let mut choice = decide(spec, free_dofs, interfaces, from_options);
+    let corrected = matches!(
+        choice.path,
+        LinearPath::Iterative {
+            coarse_correction: true,
+            ..
+        }
+    );
+    if scene.newton.coarse_correction && !corrected {
+        choice.why += " (newton.coarse_correction: only on the iterative path with interfaces)";
+    }
+    Ok(choice)
 }
 
 /// What the iterative path does with the model's interfaces.
