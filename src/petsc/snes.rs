@@ -554,8 +554,8 @@ impl Snes {
         (start, count): (usize, usize),
         modes: &[Vec<f64>],
     ) -> Result<bool> {
-        let (pc, pc_type) = self.preconditioner()?;
-        let Some(pc) = fieldsplit_within(pc, &pc_type)? else {
+        let (top, top_type) = self.preconditioner()?;
+        let Some(pc) = fieldsplit_within(top, &top_type)? else {
             return Ok(false);
         };
         let mut in_interface = vec![false; count];
@@ -577,7 +577,6 @@ impl Snes {
             interface_set.raw
         ))?;
         chk!(PCFieldSplitSetIS(pc, c"bulk".as_ptr(), bulk_set.raw))?;
-        let (top, top_type) = self.preconditioner()?;
         let parts = composite_parts(top, &top_type)?;
         let after_split = parts.iter().skip_while(|&&part| part != pc).skip(1);
         for &part in after_split {

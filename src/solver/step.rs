@@ -823,9 +823,13 @@ impl UpdateCheck for ContactUpdates<'_> {
             self.say(format_args!(
                 "Newton update shortened to {fraction:.3e} of it (contact search reach)"
             ));
-            du.iter_mut().for_each(|d| *d *= fraction);
         }
-        self.update = self.hold_closing.then_some(du);
+        if self.hold_closing {
+            if fraction < 1.0 {
+                du.iter_mut().for_each(|d| *d *= fraction);
+            }
+            self.update = Some(du);
+        }
         Ok(fraction)
     }
 
