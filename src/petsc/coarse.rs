@@ -15,14 +15,20 @@
 //!
 //! it solves the Galerkin projection of the whole tangent exactly, `e = P (P^T A P)^-1 P^T r`
 //! (LU through MUMPS, null-pivot detection on by default: an aggregate's dependent rigid modes
-//! make the projection singular, and MUMPS then leaves those directions out). The interface dofs stay at
-//! full resolution in it, so the contact's laws (open, stick, slip) enter it exactly and no
-//! multigrid is asked to coarsen them.
+//! make the projection singular, and MUMPS then leaves those directions out). The interface
+//! dofs stay at full resolution in it, so the contact's laws (open, stick, slip) enter it
+//! exactly and no multigrid is asked to coarsen them; the split before it then needs only a
+//! smoother on the interface (point Jacobi on the iterative path's default, `super::ksp`).
+//! After the split's correction `x_1 = B r`, the composite applies this one to the residual
+//! left, `x = x_1 + P (P^T A P)^-1 P^T (r - A x_1)`: a two-level method whose fine level is the
+//! bulk's V-cycle and whose coarse level holds the interface whole.
 //!
 //! Set-up, at every set-up of the preconditioner (once per Newton iteration): `P` is gathered
 //! from the split's bulk multigrid; where it and the tangent's pattern are unchanged (the
 //! multigrid is kept whole through a load step), the symbolic product and factorization are
-//! reused and only their numeric parts done again.
+//! reused and only their numeric parts done again. With unsmoothed aggregation (the default's
+//! `P_bulk`: every row in one aggregate, at most six entries) a row of `A P` has at most six
+//! entries per aggregate that the row of `A` touches, and the projection stays cheap.
 
 use std::os::raw::c_void;
 

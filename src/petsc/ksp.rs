@@ -75,8 +75,9 @@ pub enum LinearPath {
     /// With `interface_split`, a multiplicative field split: the interface dofs solved exactly
     /// (LU through MUMPS), then multigrid on the other dofs
     /// ([`super::Snes::split_interface`] names the fields); with `coarse_correction` as well,
-    /// the split then the interface coarse correction (`super::coarse`), as a multiplicative
-    /// composite.
+    /// a two-level preconditioner: the interface dofs by point Jacobi and multigrid on the
+    /// others, then the interface coarse correction (`super::coarse`), which solves the
+    /// interface dofs exactly with the multigrid's first coarse space.
     Iterative {
         interface_split: bool,
         coarse_correction: bool,
@@ -135,24 +136,24 @@ const INTERFACE_SPLIT: [(&str, &str); 8] = [
     ("-fieldsplit_bulk_mg_levels_ksp_max_it", "1"),
 ];
 
-/// [`INTERFACE_SPLIT`], the interface coarse correction (`super::coarse`), and the split
-/// again: a symmetric multiplicative composite (the split's options take the prefix
-/// `sub_0_`). Against the split then the correction only, fewer GMRES iterations for the
-/// second split's cost, and the tight solves of the load-step predictor do not stall
-/// (docs/performance.md, "The interface coarse correction").
+/// A two-level preconditioner with the interfaces in its coarse problem: the field split with
+/// the interface field by point Jacobi and the bulk by one V-cycle of unsmoothed aggregation,
+/// then the interface coarse correction (`super::coarse`), which solves the interfaces' dofs
+/// exactly together with the bulk multigrid's first coarse space; a multiplicative composite
+/// (the split's options take the prefix `sub_0_`). The correction's exact interface makes the
+/// split's own LU of it unnecessary, and unsmoothed aggregation makes its coarse space sparse,
+/// so that projecting the tangent onto it is cheap (docs/performance.md, "The interface coarse
+/// correction").
 const INTERFACE_COARSE: [(&str, &str); 11] = [
     ("-pc_type", "composite"),
-    ("-pc_composite_type", "symmetric_multiplicative"),
+    ("-pc_composite_type", "multiplicative"),
     ("-pc_composite_pcs", "fieldsplit,shell"),
     ("-sub_0_pc_fieldsplit_type", "multiplicative"),
     ("-sub_0_fieldsplit_interface_ksp_type", "preonly"),
-    ("-sub_0_fieldsplit_interface_pc_type", "lu"),
-    (
-        "-sub_0_fieldsplit_interface_pc_factor_mat_solver_type",
-        "mumps",
-    ),
+    ("-sub_0_fieldsplit_interface_pc_type", "jacobi"),
     ("-sub_0_fieldsplit_bulk_ksp_type", "preonly"),
     ("-sub_0_fieldsplit_bulk_pc_type", "gamg"),
+    ("-sub_0_fieldsplit_bulk_pc_gamg_agg_nsmooths", "0"),
     ("-sub_0_fieldsplit_bulk_mg_levels_ksp_max_it", "1"),
     ("-sub_1_coarse_mat_mumps_icntl_24", "1"),
 ];

@@ -138,8 +138,8 @@ fn decide(
                 coarse_correction: true,
             },
         ) => {
-            "iterative (GMRES; an exact solve on the interfaces' dofs, then multigrid, then a \
-             coarse correction across the interfaces)"
+            "iterative (GMRES; multigrid, then a coarse correction across the interfaces that \
+             solves their dofs exactly)"
         }
         (false, LinearPath::Iterative { .. }) => "iterative (GMRES with multigrid)",
     };
