@@ -176,9 +176,9 @@ const MOST_LINEAR_COARSE_OVER_SPLIT: f64 = 0.85;
 const MOST_STATE_DIFFERENCE_COARSE: f64 = 3e-8;
 
 /// The interface coarse correction after the split (`newton.coarse_correction`) solves the
-/// smallest level to the split's state (within the Newton tolerance) on 1 and 2 ranks, in
-/// fewer GMRES iterations, through the slide (where the matrix is made anew as the contact
-/// pattern grows: a composite preconditioner's parts must get the new matrix).
+/// smallest level to the split's state (within [`MOST_STATE_DIFFERENCE_COARSE`]) on 1 and 2
+/// ranks, in fewer GMRES iterations, through the slide (where the matrix is made anew as the
+/// contact pattern grows: a composite preconditioner's parts must get the new matrix).
 #[test]
 #[cfg_attr(
     debug_assertions,

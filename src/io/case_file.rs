@@ -519,11 +519,13 @@ pub struct NewtonSpec {
     /// (docs/performance.md, "Newton updates that close nodes, solved again").
     #[serde(default = "yes")]
     pub hold_closing: bool,
-    /// The iterative path with interfaces: after the field split, a coarse correction that
-    /// spans the interface (the tangent projected onto the bulk multigrid's first coarse space
-    /// and the interface's dofs, solved exactly; `-pc_composite_pcs fieldsplit,shell`). Fewer
-    /// GMRES iterations, which grow less with the mesh, at a higher cost per iteration. Default
-    /// false (docs/performance.md, "The interface coarse correction").
+    /// The iterative path with interfaces as a two-level preconditioner: the field split with
+    /// the interface's dofs smoothed by point Jacobi and the bulk by unsmoothed aggregation,
+    /// then a coarse correction that solves the interface exactly (the tangent projected onto
+    /// the bulk multigrid's first coarse space and the interface's dofs;
+    /// `-pc_composite_pcs fieldsplit,shell`). Fewer GMRES iterations, which grow far less with
+    /// the mesh, at a higher cost per Newton iteration. Default false (docs/performance.md,
+    /// "The interface coarse correction").
     #[serde(default)]
     pub coarse_correction: bool,
 }
