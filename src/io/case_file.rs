@@ -524,10 +524,12 @@ pub struct NewtonSpec {
     /// then a coarse correction that solves the interface exactly (the tangent projected onto
     /// the bulk multigrid's first coarse space and the interface's dofs;
     /// `-pc_composite_pcs fieldsplit,shell`). Fewer GMRES iterations, which grow far less with
-    /// the mesh, at a higher cost per Newton iteration. Default false (docs/performance.md,
-    /// "The interface coarse correction").
+    /// the mesh, at a higher cost per Newton iteration. Default: by size, on from
+    /// `crate::solver::COARSE_CORRECTION_FROM` free dofs on a nonlinear scene of first-order
+    /// elements, off otherwise (docs/performance.md, "The interface coarse correction");
+    /// `true` or `false` forces it either way.
     #[serde(default)]
-    pub coarse_correction: bool,
+    pub coarse_correction: Option<bool>,
 }
 
 /// The linear solver a case asks for (`newton.linear_solver`).
@@ -551,7 +553,7 @@ impl Default for NewtonSpec {
             linear_solver: LinearSolverSpec::Auto,
             direct_below: None,
             hold_closing: true,
-            coarse_correction: false,
+            coarse_correction: None,
         }
     }
 }

@@ -9,7 +9,16 @@
 //! depends on the elements' order ([`DIRECT_BELOW`], [`DIRECT_BELOW_SECOND_ORDER`]): where the
 //! iterative path overtakes the direct one depends on how many linear iterations the
 //! multigrid takes, which second-order elements on graded meshes raise most (the
-//! measurements: docs/performance.md, "The crossover by the elements' order"). PETSc's
+//! measurements: docs/performance.md, "The crossover by the elements' order").
+//!
+//! On the iterative path with interfaces, a second size decides the preconditioner: the field
+//! split alone (an exact solve on the interfaces' dofs, multigrid on the rest), or the interface coarse correction
+//! after it (`newton.coarse_correction`). The correction keeps the GMRES iterations per
+//! Newton iteration nearly flat under refinement but costs more per Newton iteration (a
+//! projection and its LU), so it pays only on large meshes: on a nonlinear scene of
+//! first-order elements, from [`COARSE_CORRECTION_FROM`] free dofs (docs/performance.md, "The
+//! two-level form by size"). It was not measured at such sizes with second-order elements or
+//! on a linear scene, which keep the split alone unless the case asks for it. PETSc's
 //! `-ksp_type` or `-pc_type` options replace the choice.
 
 use crate::case::Scene;
@@ -31,12 +40,18 @@ pub const DIRECT_BELOW_SECOND_ORDER: usize = 15_000;
 /// large.
 pub const LINEAR_DIRECT_BELOW: usize = 150_000;
 
+/// The free dofs from which `auto`'s iterative path corrects across the interfaces
+/// (`newton.coarse_correction` unset), on a nonlinear scene of first-order elements.
+pub const COARSE_CORRECTION_FROM: usize = 160_000;
+
 /// The free dofs from which `auto` solves iteratively, and where that number comes from (for
-/// the run's first lines).
+/// the run's first lines); and from which the iterative path adds the interface coarse
+/// correction, if at any size.
 #[derive(Debug, Clone, Copy)]
 struct Crossover {
     direct_below: usize,
     source: &'static str,
+    coarse_from: Option<usize>,
 }
 
 /// The linear solver of a run, and why, for its first lines.
@@ -54,7 +69,7 @@ pub(super) fn choose(scene: &Scene, free_dofs: usize, interfaces: bool) -> Resul
     let spec = (scene.newton.linear_solver, crossover(scene));
     let interfaces = Interfaces {
         split: interfaces,
-        coarse_correction: interfaces && scene.newton.coarse_correction,
+        coarse_correction: scene.newton.coarse_correction,
     };
     let mut choice = decide(spec, free_dofs, interfaces, from_options);
     let corrected = matches!(
@@ -64,32 +79,35 @@ pub(super) fn choose(scene: &Scene, free_dofs: usize, interfaces: bool) -> Resul
             ..
         }
     );
-    if scene.newton.coarse_correction && !corrected {
+    if scene.newton.coarse_correction == Some(true) && !corrected {
         choice.why += " (newton.coarse_correction: only on the iterative path with interfaces)";
     }
     Ok(choice)
 }
 
-/// What the iterative path does with the model's interfaces.
+/// What the iterative path does with the model's interfaces: whether it splits them off, and
+/// whether it corrects across them (`None`: by size).
 #[derive(Debug, Clone, Copy)]
 struct Interfaces {
     split: bool,
-    coarse_correction: bool,
+    coarse_correction: Option<bool>,
 }
 
-/// The scene's `newton.direct_below`, or without it the threshold of its kind.
+/// The scene's `newton.direct_below`, or without it the threshold of its kind; the coarse
+/// correction's threshold on a nonlinear scene of first-order elements.
 fn crossover(scene: &Scene) -> Crossover {
+    let second_order = scene.mesh.types.iter().any(|t| t.order() > 1);
     let (direct_below, source) = match scene.newton.direct_below {
         Some(direct_below) => (direct_below, "newton.direct_below"),
         None if scene.is_linear() => (LINEAR_DIRECT_BELOW, "a linear scene"),
-        None if scene.mesh.types.iter().any(|t| t.order() > 1) => {
-            (DIRECT_BELOW_SECOND_ORDER, "second-order elements")
-        }
+        None if second_order => (DIRECT_BELOW_SECOND_ORDER, "second-order elements"),
         None => (DIRECT_BELOW, "first-order elements"),
     };
+    let measured = !scene.is_linear() && !second_order;
     Crossover {
         direct_below,
         source,
+        coarse_from: measured.then_some(COARSE_CORRECTION_FROM),
     }
 }
 
@@ -100,14 +118,21 @@ fn decide(
     interfaces: Interfaces,
     from_options: bool,
 ) -> LinearChoice {
-    let iterative = LinearPath::Iterative {
-        interface_split: interfaces.split,
-        coarse_correction: interfaces.coarse_correction,
-    };
     let Crossover {
         direct_below,
         source,
+        coarse_from,
     } = crossover;
+    let coarse_by_size = coarse_from.filter(|&from| {
+        interfaces.split && interfaces.coarse_correction.is_none() && free_dofs >= from
+    });
+    let iterative = LinearPath::Iterative {
+        interface_split: interfaces.split,
+        coarse_correction: interfaces.split
+            && interfaces
+                .coarse_correction
+                .unwrap_or(coarse_by_size.is_some()),
+    };
     let (path, why) = match spec {
         _ if from_options => (LinearPath::Direct, "PETSc's options".to_string()),
         LinearSolverSpec::Direct => (LinearPath::Direct, "newton.linear_solver".into()),
@@ -120,6 +145,12 @@ fn decide(
             iterative,
             format!("{free_dofs} free dofs, from {direct_below} on ({source})"),
         ),
+    };
+    let why = match (path, coarse_by_size) {
+        (LinearPath::Iterative { .. }, Some(from)) if !from_options => {
+            format!("{why}; the coarse correction from {from} on")
+        }
+        _ => why,
     };
     let what = match (from_options, path) {
         (true, _) => "as PETSc's options say",
@@ -182,18 +213,29 @@ mod tests {
                 Ok(())
             });
             let c = crossover(&scene.unwrap());
-            (c.direct_below, c.source)
+            (c.direct_below, c.source, c.coarse_from)
         };
-        let first = (DIRECT_BELOW, "first-order elements");
+        let coarse = Some(COARSE_CORRECTION_FROM);
+        let first = (DIRECT_BELOW, "first-order elements", coarse);
         assert_eq!(load("cases/refinement/hex8_1.toml", None), first);
-        let second = (DIRECT_BELOW_SECOND_ORDER, "second-order elements");
+        let second = (DIRECT_BELOW_SECOND_ORDER, "second-order elements", None);
         assert_eq!(load("cases/refinement/hex27_1.toml", None), second);
         assert_eq!(load("cases/hertz/case.toml", None), second);
-        let linear = (LINEAR_DIRECT_BELOW, "a linear scene");
+        let linear = (LINEAR_DIRECT_BELOW, "a linear scene", None);
         assert_eq!(load("cases/thick_sphere_tied/case.toml", None), linear);
         let own = (1234, "newton.direct_below");
-        assert_eq!(load("cases/refinement/hex27_1.toml", Some(1234)), own);
-        assert_eq!(load("cases/thick_sphere_tied/case.toml", Some(1234)), own);
+        assert_eq!(
+            load("cases/refinement/hex8_1.toml", Some(1234)),
+            (own.0, own.1, coarse)
+        );
+        assert_eq!(
+            load("cases/refinement/hex27_1.toml", Some(1234)),
+            (own.0, own.1, None)
+        );
+        assert_eq!(
+            load("cases/thick_sphere_tied/case.toml", Some(1234)),
+            (own.0, own.1, None)
+        );
     }
 
     /// `auto` takes the direct path below the crossover and the iterative one from it on, with
@@ -204,18 +246,19 @@ mod tests {
         let at = |direct_below| Crossover {
             direct_below,
             source: "newton.direct_below",
+            coarse_from: None,
         };
         let auto = (LinearSolverSpec::Auto, at(1000));
         let path = |spec, dofs, split, options| {
             let interfaces = Interfaces {
                 split,
-                coarse_correction: false,
+                coarse_correction: Some(false),
             };
             decide(spec, dofs, interfaces, options).path
         };
         let split_only = |split| Interfaces {
             split,
-            coarse_correction: false,
+            coarse_correction: Some(false),
         };
         assert_eq!(path(auto, 999, true, false), LinearPath::Direct);
         let split = LinearPath::Iterative {
@@ -236,7 +279,7 @@ mod tests {
         assert_eq!(path(iterative, 10, true, false), split);
         let coarse = Interfaces {
             split: true,
-            coarse_correction: true,
+            coarse_correction: Some(true),
         };
         assert_eq!(
             decide(iterative, 10, coarse, false).path,
@@ -256,6 +299,53 @@ mod tests {
             why,
             "iterative (GMRES; an exact solve on the interfaces' dofs, then multigrid): 5000 \
              free dofs, from 1000 on (newton.direct_below)"
+        );
+    }
+
+    /// Unset, the coarse correction follows the size on the iterative path with interfaces
+    /// (from the threshold on, and the first lines say so); set, it holds at any size; it
+    /// never applies without interfaces, on the direct path, or where the scene has no
+    /// threshold for it.
+    #[test]
+    fn the_coarse_correction_follows_the_size_unless_chosen() {
+        let auto = |coarse_from| {
+            let crossover = Crossover {
+                direct_below: 1000,
+                source: "first-order elements",
+                coarse_from,
+            };
+            (LinearSolverSpec::Auto, crossover)
+        };
+        let interfaces = |split, coarse_correction| Interfaces {
+            split,
+            coarse_correction,
+        };
+        let iterative = |interface_split, coarse_correction| LinearPath::Iterative {
+            interface_split,
+            coarse_correction,
+        };
+        let path = |coarse_from, dofs, split, coarse| {
+            decide(auto(coarse_from), dofs, interfaces(split, coarse), false).path
+        };
+        let from = Some(5000);
+        assert_eq!(path(from, 4999, true, None), iterative(true, false));
+        assert_eq!(path(from, 5000, true, None), iterative(true, true));
+        assert_eq!(path(from, 5000, true, Some(false)), iterative(true, false));
+        assert_eq!(path(from, 1000, true, Some(true)), iterative(true, true));
+        assert_eq!(path(from, 5000, false, None), iterative(false, false));
+        assert_eq!(path(from, 5000, false, Some(true)), iterative(false, false));
+        assert_eq!(path(from, 999, true, None), LinearPath::Direct);
+        assert_eq!(path(None, 1_000_000, true, None), iterative(true, false));
+        assert_eq!(
+            decide(auto(from), 5000, interfaces(true, None), false).why,
+            "iterative (GMRES; multigrid, then a coarse correction across the interfaces that \
+             solves their dofs exactly): 5000 free dofs, from 1000 on (first-order elements); \
+             the coarse correction from 5000 on"
+        );
+        assert_eq!(
+            decide(auto(from), 5000, interfaces(true, Some(true)), false).why,
+            "iterative (GMRES; multigrid, then a coarse correction across the interfaces that \
+             solves their dofs exactly): 5000 free dofs, from 1000 on (first-order elements)"
         );
     }
 }
