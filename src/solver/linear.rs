@@ -11,15 +11,18 @@
 //! multigrid takes, which second-order elements on graded meshes raise most (the
 //! measurements: docs/performance.md, "The crossover by the elements' order").
 //!
-//! On the iterative path with interfaces, a second size decides the preconditioner: the field
-//! split alone (an exact solve on the interfaces' dofs, multigrid on the rest), or the interface coarse correction
-//! after it (`newton.coarse_correction`). The correction keeps the GMRES iterations per
-//! Newton iteration nearly flat under refinement but costs more per Newton iteration (a
+//! On the iterative path with interfaces (`auto`'s or `"iterative"`), a second size decides
+//! the preconditioner: the field split (an exact solve on the interfaces' dofs, multigrid on
+//! the rest), or the interface coarse correction (`newton.coarse_correction`): the split with
+//! the interfaces' dofs smoothed by point Jacobi, then a correction that solves them exactly
+//! with the bulk multigrid's first coarse space. The correction keeps the GMRES iterations
+//! per Newton iteration nearly flat under refinement but costs more per Newton iteration (a
 //! projection and its LU), so it pays only on large meshes: on a nonlinear scene of
-//! first-order elements, from [`COARSE_CORRECTION_FROM`] free dofs (docs/performance.md, "The
-//! two-level form by size"). It was not measured at such sizes with second-order elements or
-//! on a linear scene, which keep the split alone unless the case asks for it. PETSc's
-//! `-ksp_type` or `-pc_type` options replace the choice.
+//! first-order elements, from [`COARSE_CORRECTION_FROM`] free dofs (measured on the
+//! refinement family's frictional slide, docs/performance.md, "The two-level form by size").
+//! Second-order elements and linear scenes were not measured at such sizes and keep the split
+//! unless the case asks for the correction. PETSc's `-ksp_type` or `-pc_type` options
+//! replace the choice.
 
 use crate::case::Scene;
 use crate::dofs::DofMap;
@@ -40,9 +43,10 @@ pub const DIRECT_BELOW_SECOND_ORDER: usize = 15_000;
 /// large.
 pub const LINEAR_DIRECT_BELOW: usize = 150_000;
 
-/// The free dofs from which `auto`'s iterative path corrects across the interfaces
-/// (`newton.coarse_correction` unset), on a nonlinear scene of first-order elements.
-pub const COARSE_CORRECTION_FROM: usize = 160_000;
+/// The free dofs from which the iterative path (`auto`'s or `"iterative"`) corrects across
+/// the interfaces (`newton.coarse_correction` unset), on a nonlinear scene of first-order
+/// elements.
+pub const COARSE_CORRECTION_FROM: usize = 150_000;
 
 /// The free dofs from which `auto` solves iteratively, and where that number comes from (for
 /// the run's first lines); and from which the iterative path adds the interface coarse
@@ -146,10 +150,19 @@ fn decide(
             format!("{free_dofs} free dofs, from {direct_below} on ({source})"),
         ),
     };
-    let why = match (path, coarse_by_size) {
-        (LinearPath::Iterative { .. }, Some(from)) if !from_options => {
+    let why = match (path, coarse_by_size, interfaces.coarse_correction) {
+        (_, _, _) if from_options => why,
+        (LinearPath::Iterative { .. }, Some(from), _) => {
             format!("{why}; the coarse correction from {from} on")
         }
+        (
+            LinearPath::Iterative {
+                coarse_correction: true,
+                ..
+            },
+            _,
+            Some(true),
+        ) => format!("{why}; the coarse correction by newton.coarse_correction"),
         _ => why,
     };
     let what = match (from_options, path) {
@@ -345,7 +358,8 @@ mod tests {
         assert_eq!(
             decide(auto(from), 5000, interfaces(true, Some(true)), false).why,
             "iterative (GMRES; multigrid, then a coarse correction across the interfaces that \
-             solves their dofs exactly): 5000 free dofs, from 1000 on (first-order elements)"
+             solves their dofs exactly): 5000 free dofs, from 1000 on (first-order elements); \
+             the coarse correction by newton.coarse_correction"
         );
     }
 }
