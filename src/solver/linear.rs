@@ -115,6 +115,28 @@ fn crossover(scene: &Scene) -> Crossover {
     }
 }
 
+/// Whether the iterative path corrects across the interfaces (as the case says, or from
+/// `coarse_from` free dofs on), and what the run's second line adds about it.
+fn coarse_choice(
+    interfaces: Interfaces,
+    coarse_from: Option<usize>,
+    free_dofs: usize,
+) -> (bool, Option<String>) {
+    if !interfaces.split {
+        return (false, None);
+    }
+    match (interfaces.coarse_correction, coarse_from) {
+        (Some(true), _) => (
+            true,
+            Some("the coarse correction by newton.coarse_correction".into()),
+        ),
+        (None, Some(from)) if free_dofs >= from => {
+            (true, Some(format!("the coarse correction from {from} on")))
+        }
+        _ => (false, None),
+    }
+}
+
 /// [`choose`], given whether PETSc's options choose the solver.
 fn decide(
     (spec, crossover): (LinearSolverSpec, Crossover),
@@ -127,15 +149,10 @@ fn decide(
         source,
         coarse_from,
     } = crossover;
-    let coarse_by_size = coarse_from.filter(|&from| {
-        interfaces.split && interfaces.coarse_correction.is_none() && free_dofs >= from
-    });
+    let (coarse_correction, coarse_note) = coarse_choice(interfaces, coarse_from, free_dofs);
     let iterative = LinearPath::Iterative {
         interface_split: interfaces.split,
-        coarse_correction: interfaces.split
-            && interfaces
-                .coarse_correction
-                .unwrap_or(coarse_by_size.is_some()),
+        coarse_correction,
     };
     let (path, why) = match spec {
         _ if from_options => (LinearPath::Direct, "PETSc's options".to_string()),
@@ -150,19 +167,8 @@ fn decide(
             format!("{free_dofs} free dofs, from {direct_below} on ({source})"),
         ),
     };
-    let why = match (path, coarse_by_size, interfaces.coarse_correction) {
-        (_, _, _) if from_options => why,
-        (LinearPath::Iterative { .. }, Some(from), _) => {
-            format!("{why}; the coarse correction from {from} on")
-        }
-        (
-            LinearPath::Iterative {
-                coarse_correction: true,
-                ..
-            },
-            _,
-            Some(true),
-        ) => format!("{why}; the coarse correction by newton.coarse_correction"),
+    let why = match (path, coarse_note) {
+        (LinearPath::Iterative { .. }, Some(note)) if !from_options => format!("{why}; {note}"),
         _ => why,
     };
     let what = match (from_options, path) {
