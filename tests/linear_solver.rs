@@ -189,7 +189,10 @@ fn the_coarse_correction_solves_the_smallest_level_in_fewer_linear_iterations() 
     let text = std::fs::read_to_string(&level).unwrap();
     let split = case(
         "level1_split",
-        &with_newton(&text, "linear_solver = \"iterative\""),
+        &with_newton(
+            &text,
+            "linear_solver = \"iterative\"\ncoarse_correction = false",
+        ),
     );
     let coarse = case(
         "level1_coarse",
@@ -256,7 +259,10 @@ fn the_iterative_path_solves_the_smallest_level_as_the_direct_one() {
     );
     let iterative = case(
         "level1_iterative",
-        &with_newton(&text, "linear_solver = \"iterative\""),
+        &with_newton(
+            &text,
+            "linear_solver = \"iterative\"\ncoarse_correction = false",
+        ),
     );
     let (direct_out, _) = common::run_case(&direct, 1, &["-q"]);
     let newton_direct = common::metric(&direct_out, "total_newton_its");
