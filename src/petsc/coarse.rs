@@ -285,7 +285,8 @@ unsafe fn prolongator_entries(split: p::PC) -> Result<Entries> {
     chk!(MatGetOwnershipRangesColumn(bulk_p, &mut coarse_starts))?;
     let ranks = super::comm_size()?;
     let coarse_starts = std::slice::from_raw_parts(coarse_starts, ranks + 1);
-    // The columns of P, rank by rank: the rank's coarse bulk columns, then its interface dofs.
+    // The columns of P, rank by rank: the rank's interface dofs, numbered in descending order,
+    // then its coarse bulk columns (see [`interface_column`]).
     let interface_counts = counts_of_ranks(interface.len())?;
     let mut starts = Vec::with_capacity(ranks + 1);
     starts.push(0);
@@ -312,21 +313,35 @@ unsafe fn prolongator_entries(split: p::PC) -> Result<Entries> {
         );
         for &col in cols_s {
             let q = coarse_starts[1..].partition_point(|&s| s <= col);
-            e.cols.push(starts[q] + col - coarse_starts[q]);
+            e.cols
+                .push(starts[q] + interface_counts[q] as PetscInt + col - coarse_starts[q]);
         }
         e.vals.extend_from_slice(vals_s);
         e.rows.push(global);
         e.lengths.push(n);
         chk!(MatRestoreRow(bulk_p, row, &mut n, &mut cols, &mut vals))?;
     }
-    let first_interface_col = starts[rank] + coarse_starts[rank + 1] - coarse_starts[rank];
     for (k, &global) in interface.iter().enumerate() {
         e.rows.push(global);
         e.lengths.push(1);
-        e.cols.push(first_interface_col + k as PetscInt);
+        e.cols
+            .push(interface_column(starts[rank], interface.len(), k));
         e.vals.push(1.0);
     }
     Ok(e)
+}
+
+/// The column of `P` of the `k`-th of a rank's `count` interface dofs, whose columns start at
+/// `first`: the interface dofs come first among the rank's columns, in descending order.
+///
+/// PETSc's symbolic product `A P` merges, row by row, the columns of the rows of `P` that a row
+/// of `A` touches into a sorted list, walking it from its head for every row of `P`. An
+/// interface row of `A` is long (a contact stencil) and most of its columns are interface
+/// dofs, rows of `P` with one entry: in ascending order each new column would be appended
+/// after all the others, a walk across the whole row each time, the row's cost the square of
+/// its length. In descending order each new one goes to the head of the list.
+fn interface_column(first: PetscInt, count: usize, k: usize) -> PetscInt {
+    first + (count - 1 - k) as PetscInt
 }
 
 /// `P` as a matrix of the tangent `a`'s row layout.
