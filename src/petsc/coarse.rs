@@ -13,6 +13,9 @@
 //!         [ 0       I ]   (interface rows)
 //! ```
 //!
+//! (a picture by field: the rows and columns are numbered rank by rank, and within a rank's
+//! columns the interface's come first, see [`interface_column`])
+//!
 //! it solves the Galerkin projection of the whole tangent exactly, `e = P (P^T A P)^-1 P^T r`
 //! (LU through MUMPS, null-pivot detection on by default: an aggregate's dependent rigid modes
 //! make the projection singular, and MUMPS then leaves those directions out). The interface
@@ -331,15 +334,18 @@ unsafe fn prolongator_entries(split: p::PC) -> Result<Entries> {
     Ok(e)
 }
 
-/// The column of `P` of the `k`-th of a rank's `count` interface dofs, whose columns start at
-/// `first`: the interface dofs come first among the rank's columns, in descending order.
+/// The column of `P` of the `k`-th of a rank's `count` interface dofs (the field's rows in
+/// ascending order), whose columns start at `first`: the interface dofs come first among the
+/// rank's columns, in descending order.
 ///
-/// PETSc's symbolic product `A P` merges, row by row, the columns of the rows of `P` that a row
-/// of `A` touches into a sorted list, walking it from its head for every row of `P`. An
-/// interface row of `A` is long (a contact stencil) and most of its columns are interface
-/// dofs, rows of `P` with one entry: in ascending order each new column would be appended
-/// after all the others, a walk across the whole row each time, the row's cost the square of
-/// its length. In descending order each new one goes to the head of the list.
+/// PETSc's symbolic product `A P` (3.18: the parallel `nonscalable` algorithm and the
+/// sequential one, `PetscLLCondensedAddSorted` and `PetscLLAddSorted`) merges, row by row, the
+/// columns of the rows of `P` that a row of `A` touches into a sorted linked list, walking it
+/// from its head for every row of `P`. An interface row of `A` is long (a contact stencil) and
+/// most of its columns are interface dofs, rows of `P` with one entry, met in ascending order:
+/// numbered ascending, each new column would be appended after all the others, a walk across
+/// the whole row each time, the row's cost the square of its length. Numbered descending, each
+/// new interface column of the rank goes to the head of the list.
 fn interface_column(first: PetscInt, count: usize, k: usize) -> PetscInt {
     first + (count - 1 - k) as PetscInt
 }
