@@ -17,9 +17,10 @@
 //! the interfaces' dofs smoothed by point Jacobi, then a correction that solves them exactly
 //! with the bulk multigrid's first coarse space. The correction keeps the GMRES iterations
 //! per Newton iteration nearly flat under refinement but costs more per Newton iteration (a
-//! projection and its LU), so it pays only on large meshes: on a nonlinear scene of
+//! projection and its LU), so it pays only from some size on: on a nonlinear scene of
 //! first-order elements, from [`COARSE_CORRECTION_FROM`] free dofs (measured on the
-//! refinement family's frictional slide, docs/performance.md, "The two-level form by size").
+//! refinement family's frictional slide, docs/performance.md, "The two-level form from
+//! 30 000 free dofs").
 //! Second-order elements and linear scenes were not measured at such sizes and keep the split
 //! unless the case asks for the correction. PETSc's `-ksp_type` or `-pc_type` options
 //! replace the choice.
@@ -46,7 +47,7 @@ pub const LINEAR_DIRECT_BELOW: usize = 150_000;
 /// The free dofs from which the iterative path (`auto`'s or `"iterative"`) corrects across
 /// the interfaces (`newton.coarse_correction` unset), on a nonlinear scene of first-order
 /// elements.
-pub const COARSE_CORRECTION_FROM: usize = 150_000;
+pub const COARSE_CORRECTION_FROM: usize = 30_000;
 
 /// The free dofs from which `auto` solves iteratively, and where that number comes from (for
 /// the run's first lines); and from which the iterative path adds the interface coarse
