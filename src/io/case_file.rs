@@ -526,7 +526,8 @@ pub struct NewtonSpec {
     /// `-pc_composite_pcs fieldsplit,shell`). Fewer GMRES iterations, which grow far less with
     /// the mesh, at a higher cost per Newton iteration. Default: by size, on from
     /// `crate::solver::COARSE_CORRECTION_FROM` free dofs on a nonlinear scene of first-order
-    /// elements, off otherwise (docs/performance.md, "The interface coarse correction");
+    /// elements and `crate::solver::COARSE_CORRECTION_FROM_SECOND_ORDER` with second-order
+    /// ones, off otherwise (docs/performance.md, "The interface coarse correction");
     /// `true` or `false` forces it either way.
     #[serde(default)]
     pub coarse_correction: Option<bool>,

@@ -17,11 +17,11 @@
 //! the interfaces' dofs smoothed by point Jacobi, then a correction that solves them exactly
 //! with the bulk multigrid's first coarse space. The correction keeps the GMRES iterations
 //! per Newton iteration nearly flat under refinement but costs more per Newton iteration (a
-//! projection and its LU), so it pays only from some size on: on a nonlinear scene of
-//! first-order elements, from [`COARSE_CORRECTION_FROM`] free dofs (measured on the
-//! refinement family's frictional slide, docs/performance.md, "The two-level form from
-//! 30 000 free dofs").
-//! Second-order elements and linear scenes were not measured at such sizes and keep the split
+//! projection and its LU), so it pays only from some size on: on a nonlinear scene, from
+//! [`COARSE_CORRECTION_FROM`] free dofs with first-order elements and from
+//! [`COARSE_CORRECTION_FROM_SECOND_ORDER`] with second-order ones (measured on the refinement
+//! family's frictional slide, docs/performance.md, "The two-level form from 30 000 free dofs"
+//! and "The two-level form on Hex27"). A linear scene, factorized once, keeps the split
 //! unless the case asks for the correction. PETSc's `-ksp_type` or `-pc_type` options
 //! replace the choice.
 
@@ -48,6 +48,9 @@ pub const LINEAR_DIRECT_BELOW: usize = 150_000;
 /// the interfaces (`newton.coarse_correction` unset), on a nonlinear scene of first-order
 /// elements.
 pub const COARSE_CORRECTION_FROM: usize = 30_000;
+
+/// [`COARSE_CORRECTION_FROM`] on a mesh with at least one second-order element.
+pub const COARSE_CORRECTION_FROM_SECOND_ORDER: usize = 70_000;
 
 /// The free dofs from which `auto` solves iteratively, and where that number comes from (for
 /// the run's first lines); and from which the iterative path adds the interface coarse
@@ -99,7 +102,7 @@ struct Interfaces {
 }
 
 /// The scene's `newton.direct_below`, or without it the threshold of its kind; the coarse
-/// correction's threshold on a nonlinear scene of first-order elements.
+/// correction's threshold on a nonlinear scene, by the elements' order.
 fn crossover(scene: &Scene) -> Crossover {
     let second_order = scene.mesh.types.iter().any(|t| t.order() > 1);
     let (direct_below, source) = match scene.newton.direct_below {
@@ -108,11 +111,14 @@ fn crossover(scene: &Scene) -> Crossover {
         None if second_order => (DIRECT_BELOW_SECOND_ORDER, "second-order elements"),
         None => (DIRECT_BELOW, "first-order elements"),
     };
-    let measured = !scene.is_linear() && !second_order;
+    let coarse_from = match second_order {
+        false => COARSE_CORRECTION_FROM,
+        true => COARSE_CORRECTION_FROM_SECOND_ORDER,
+    };
     Crossover {
         direct_below,
         source,
-        coarse_from: measured.then_some(COARSE_CORRECTION_FROM),
+        coarse_from: (!scene.is_linear()).then_some(coarse_from),
     }
 }
 
@@ -238,7 +244,12 @@ mod tests {
         let coarse = Some(COARSE_CORRECTION_FROM);
         let first = (DIRECT_BELOW, "first-order elements", coarse);
         assert_eq!(load("cases/refinement/hex8_1.toml", None), first);
-        let second = (DIRECT_BELOW_SECOND_ORDER, "second-order elements", None);
+        let coarse_second = Some(COARSE_CORRECTION_FROM_SECOND_ORDER);
+        let second = (
+            DIRECT_BELOW_SECOND_ORDER,
+            "second-order elements",
+            coarse_second,
+        );
         assert_eq!(load("cases/refinement/hex27_1.toml", None), second);
         assert_eq!(load("cases/hertz/case.toml", None), second);
         let linear = (LINEAR_DIRECT_BELOW, "a linear scene", None);
@@ -250,7 +261,7 @@ mod tests {
         );
         assert_eq!(
             load("cases/refinement/hex27_1.toml", Some(1234)),
-            (own.0, own.1, None)
+            (own.0, own.1, coarse_second)
         );
         assert_eq!(
             load("cases/thick_sphere_tied/case.toml", Some(1234)),

@@ -89,7 +89,8 @@ use crate::petsc::{Matrix, Petsc, Snes, Vector};
 pub(crate) use collective::agree_on;
 pub use collective::lowest_rank_with;
 pub use linear::{
-    COARSE_CORRECTION_FROM, DIRECT_BELOW, DIRECT_BELOW_SECOND_ORDER, LINEAR_DIRECT_BELOW,
+    COARSE_CORRECTION_FROM, COARSE_CORRECTION_FROM_SECOND_ORDER, DIRECT_BELOW,
+    DIRECT_BELOW_SECOND_ORDER, LINEAR_DIRECT_BELOW,
 };
 
 use assembly::Pattern;
