@@ -21,8 +21,8 @@
 //! [`COARSE_CORRECTION_FROM`] free dofs with first-order elements and from
 //! [`COARSE_CORRECTION_FROM_SECOND_ORDER`] with second-order ones (measured on the refinement
 //! family's frictional slide, docs/performance.md, "The two-level form from 30 000 free dofs"
-//! and "The two-level form on Hex27"). A linear scene, factorized once, keeps the split
-//! unless the case asks for the correction. PETSc's `-ksp_type` or `-pc_type` options
+//! and "The two-level form on Hex27"). A linear scene (not measured at such sizes) keeps the
+//! split unless the case asks for the correction. PETSc's `-ksp_type` or `-pc_type` options
 //! replace the choice.
 
 use crate::case::Scene;
