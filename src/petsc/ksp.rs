@@ -143,8 +143,10 @@ const INTERFACE_SPLIT: [(&str, &str); 8] = [
 /// (the split's options take the prefix `sub_0_`). The correction's exact interface makes the
 /// split's own LU of it unnecessary, and unsmoothed aggregation makes its coarse space sparse,
 /// so that projecting the tangent onto it is cheap (docs/performance.md, "The interface coarse
-/// correction").
-const INTERFACE_COARSE: [(&str, &str); 11] = [
+/// correction"). Its LU orders by PORD, a nested dissection: on a small projection MUMPS's
+/// automatic choice is AMF, whose elimination tree costs more and leaves less for the second
+/// rank (docs/performance.md, "The coarse LU on two ranks").
+const INTERFACE_COARSE: [(&str, &str); 12] = [
     ("-pc_type", "composite"),
     ("-pc_composite_type", "multiplicative"),
     ("-pc_composite_pcs", "fieldsplit,shell"),
@@ -156,6 +158,7 @@ const INTERFACE_COARSE: [(&str, &str); 11] = [
     ("-sub_0_fieldsplit_bulk_pc_gamg_agg_nsmooths", "0"),
     ("-sub_0_fieldsplit_bulk_mg_levels_ksp_max_it", "1"),
     ("-sub_1_coarse_mat_mumps_icntl_24", "1"),
+    ("-sub_1_coarse_mat_mumps_icntl_7", "4"),
 ];
 
 /// Every option [`set_linear_solver_defaults`] may set (restored after each run of a study:
