@@ -44,8 +44,8 @@ use crate::error::{Error, Result};
 /// `split` (fields `interface` and `bulk`, the bulk by GAMG), a part of the same composite
 /// before it (so that the split, set up when first applied, is set up before the shell). Its
 /// LU takes the options of the prefix `coarse_` after the shell's own (`-sub_1_coarse_...` in
-/// a composite); the iterative path sets null-pivot detection and PORD's ordering there
-/// (`-sub_1_coarse_mat_mumps_icntl_24 1`, `-sub_1_coarse_mat_mumps_icntl_7 4`, `super::ksp`).
+/// a composite); the iterative path sets its MUMPS options there (null-pivot detection and the
+/// ordering: `super::ksp`'s `INTERFACE_COARSE`).
 pub(crate) fn attach(shell: p::PC, split: p::PC) -> Result<()> {
     let mut comm = p::MPI_Comm(std::ptr::null_mut());
     chk!(PetscObjectGetComm(shell as p::PetscObject, &mut comm))?;

@@ -111,9 +111,10 @@ fn crossover(scene: &Scene) -> Crossover {
         None if second_order => (DIRECT_BELOW_SECOND_ORDER, "second-order elements"),
         None => (DIRECT_BELOW, "first-order elements"),
     };
-    let coarse_from = match second_order {
-        false => COARSE_CORRECTION_FROM,
-        true => COARSE_CORRECTION_FROM_SECOND_ORDER,
+    let coarse_from = if second_order {
+        COARSE_CORRECTION_FROM_SECOND_ORDER
+    } else {
+        COARSE_CORRECTION_FROM
     };
     Crossover {
         direct_below,
